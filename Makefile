@@ -1,0 +1,46 @@
+# masonry_fdem — two commands: `make demo` and `make test`.
+# Both create .venv on first use with a Python >= 3.12 found on the machine and install
+# the package with its test extras and dolfinx from the dolfinx-solver-real wheel.
+# Override the interpreter with `make PYTHON=/path/to/python3.12 test`.
+
+VENV ?= .venv
+NP ?= 2
+PY := $(VENV)/bin/python
+MPIRUN := $(VENV)/bin/mpirun
+# an existing conda/Docker dolfinx: `make test VENV_FLAGS=--system-site-packages EXTRAS=test`
+EXTRAS ?= test,wheel
+VENV_FLAGS ?=
+
+.PHONY: demo test test-serial test-parallel precompile bench clean venv
+
+PYTHON ?= $(shell bash tools/find_python.sh)
+
+venv: $(VENV)/.installed
+
+$(VENV)/.installed: pyproject.toml
+	@if [ -z "$(PYTHON)" ]; then echo "error: no Python >= 3.12 found (set PYTHON=...)"; exit 1; fi
+	@echo "using $(PYTHON)"
+	test -x $(PY) || $(PYTHON) -m venv $(VENV_FLAGS) $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[$(EXTRAS)]"
+	touch $@
+
+precompile: venv
+	$(PY) -m masonry_fdem.precompile
+
+demo: precompile
+	$(MPIRUN) -n $(NP) $(PY) demos/settle_arch.py --out out_settle_arch
+
+test: test-serial test-parallel
+
+test-serial: precompile
+	$(PY) -m pytest tests -q
+
+test-parallel: precompile
+	$(MPIRUN) -n $(NP) $(PY) -m pytest tests -q -p no:cacheprovider
+
+bench: precompile
+	$(PY) benchmarks/step_cost.py
+
+clean:
+	rm -rf $(VENV) out_* .pytest_cache

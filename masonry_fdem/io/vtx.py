@@ -1,0 +1,60 @@
+"""ParaView output through dolfinx's VTXWriter (ADIOS2 BP files).
+
+Two time series in the run folder: ``displacement.bp`` (nodal displacement and velocity,
+P1) and ``stress.bp`` (Cauchy stress per cell, DG0). Open them in ParaView with the ADIOS2
+VTX reader and apply "Warp By Vector" on the displacement.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import masonry_fdem._compat  # noqa: F401
+import dolfinx
+import dolfinx.fem
+import dolfinx.io
+
+__all__ = ["VTXOutput"]
+
+
+class VTXOutput:
+    """Writes the model state at chosen times (collective).
+
+    Args:
+        model: the model.
+        folder: output folder (created).
+    """
+
+    def __init__(self, model, folder: str | Path):
+        self.model = model
+        self.folder = Path(folder)
+        if model.comm.rank == 0:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        model.comm.barrier()
+        self.velocity = dolfinx.fem.Function(model.V, name="velocity")
+        self._nodal = dolfinx.io.VTXWriter(
+            model.comm, self.folder / "displacement.bp", [model.u, self.velocity],
+            engine="BP4",
+        )
+        self._cell = dolfinx.io.VTXWriter(
+            model.comm, self.folder / "stress.bp", [model.stress], engine="BP4"
+        )
+
+    def write(self, t: float, velocity=None) -> None:
+        """Write displacement [m], velocity [m/s] and Cauchy stress [Pa] at time t [s]."""
+        if velocity is None:
+            velocity = self.model.v
+        self.velocity.x.array[:] = velocity
+        self.model.update_stress()
+        self._nodal.write(t)
+        self._cell.write(t)
+
+    def close(self) -> None:
+        self._nodal.close()
+        self._cell.close()
+
+    def __enter__(self) -> VTXOutput:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,523 @@
+"""The assembled model: one dolfinx mesh of all blocks, materials, masses, loads, supports.
+
+A :class:`Model` owns the state of the deformable blocks (displacement ``u`` as a dolfinx
+function, velocity ``v`` as an array), the compiled internal-force form, the lumped mass and
+the load and support definitions. Solvers (``masonry_fdem.solvers``) advance it in time.
+
+Kinematics are total Lagrangian: the mesh stays in the reference configuration and the
+current position is ``x = X + u``. The internal force ``f_int = ∫ P(F) : ∇v w dX`` (``w``
+the out-of-plane width) is assembled by dolfinx from ONE compiled form into a preallocated
+array; each material acts on its own tagged cells through ``dx(material_id)``.
+
+Units are SI: lengths [m], forces [N], stresses [Pa], masses [kg], time [s].
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import logging
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from mpi4py import MPI
+
+import numpy as np
+
+import masonry_fdem._compat  # noqa: F401  (imports dolfinx_solver before dolfinx)
+import dolfinx
+import dolfinx.fem
+import dolfinx.mesh
+import ufl
+from dolfinx import cpp as _cpp
+
+from masonry_fdem.constants import G
+from masonry_fdem.materials import (
+    Hypothesis,
+    Material,
+    cauchy_stress,
+    green_lagrange,
+    lame_parameters,
+    svk_energy_density,
+    svk_second_piola,
+)
+from masonry_fdem.parallel import DistributedBlockMesh, create_block_mesh
+from masonry_fdem.solvers import _kernels as K
+
+if TYPE_CHECKING:
+    from masonry_fdem.geometry import BlockMesh
+
+__all__ = ["Model", "BlockSelection", "Prescription"]
+
+log = logging.getLogger(__name__)
+
+#: A set of blocks: a name or glob pattern ("brick:*"), a block id, a sequence of those,
+#: or a predicate on the block centroid (x, y) [m].
+BlockSelection = str | int | Sequence[str | int] | Callable[[np.ndarray], bool]
+
+
+@dataclass
+class Prescription:
+    """Prescribed velocity [m/s] on some dofs (zero for a fixed support).
+
+    Attributes:
+        name: label used in the history (its reaction force is reported).
+        dofs: local dof indices (block size 2 flattened).
+        components: (len(dofs),) component (0: x, 1: y) of each dof.
+        velocity: (2,) velocity or a function of time t [s] returning it; a ``None``
+            component is free.
+    """
+
+    name: str
+    dofs: np.ndarray
+    components: np.ndarray
+    velocity: Callable[[float], Sequence[float]] | Sequence[float | None]
+
+    def value(self, t: float) -> np.ndarray:
+        vel = self.velocity(t) if callable(self.velocity) else self.velocity
+        vel = np.array([0.0 if c is None else float(c) for c in vel])
+        return vel[self.components]
+
+    @property
+    def time_dependent(self) -> bool:
+        return callable(self.velocity)
+
+
+class Model:
+    """Deformable blocks in ONE dolfinx mesh, with materials, loads and supports.
+
+    Args:
+        blocks: the block mesh (from ``masonry_fdem.geometry``), the same on every rank.
+        materials: material of each material name used in ``blocks``.
+        hypothesis: plane stress (with out-of-plane ``width``) or plane strain.
+        width: out-of-plane width [m] (arch barrel width, wall thickness); under plane
+            strain it is the length of the slice the forces refer to.
+        comm: MPI communicator; each block goes wholly to one rank.
+
+    Raises:
+        ValueError: a material is missing, or a constant is out of range.
+    """
+
+    def __init__(
+        self,
+        blocks: BlockMesh,
+        materials: Mapping[str, Material],
+        *,
+        hypothesis: Hypothesis | str = Hypothesis.PLANE_STRESS,
+        width: float = 1.0,
+        comm: MPI.Comm = MPI.COMM_WORLD,
+    ):
+        self.hypothesis = Hypothesis(hypothesis)
+        if not (np.isfinite(width) and width > 0):
+            raise ValueError(f"out-of-plane width must be > 0 m, got {width}")
+        self.width = float(width)
+        missing = [m for m in blocks.material_names if m not in materials]
+        if missing:
+            raise ValueError(
+                f"no Material given for material name(s) {missing}; "
+                f"the block mesh uses {list(blocks.material_names)}"
+            )
+        for name in blocks.material_names:
+            if not isinstance(materials[name], Material):
+                raise TypeError(f"materials[{name!r}] must be a Material")
+        self.blocks = blocks
+        self.materials = {name: materials[name] for name in blocks.material_names}
+        self.comm = comm
+        self.dmesh: DistributedBlockMesh = create_block_mesh(blocks, comm)
+        self.mesh = self.dmesh.mesh
+        self._setup_spaces()
+        self._setup_forms()
+        self._setup_mass()
+        self.f_int = np.zeros_like(self.u.x.array)
+        self.f_dead = np.zeros_like(self.u.x.array)
+        self.f_live = np.zeros_like(self.u.x.array)
+        self.prescriptions: list[Prescription] = []
+        self.monitors: dict[str, tuple[int, int]] = {}
+
+    # ------------------------------------------------------------------ set-up
+    def _setup_spaces(self) -> None:
+        mesh = self.mesh
+        self.V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (2,)))
+        imap = self.V.dofmap.index_map
+        if imap.num_ghosts != 0:
+            raise RuntimeError("a block is split between ranks (ghost nodes found)")
+        self.n_nodes = imap.size_local
+        self.u = dolfinx.fem.Function(self.V, name="displacement")
+        self.v = np.zeros_like(self.u.x.array)
+        # local dof-node -> input node of the BlockMesh, through the geometry dofmap
+        cell_dofs = self.V.dofmap.list
+        geom = mesh.geometry.dofmaps[0]
+        self.node_input = np.empty(self.n_nodes, dtype=np.int64)
+        self.node_input[cell_dofs.ravel()] = self.dmesh.node_input[geom.ravel()]
+        self.X = self.blocks.x[self.node_input]  # (n_nodes, 2) reference coordinates
+        self.node_block = self.blocks.node_block[self.node_input].astype(np.int32)
+        self.cell_nodes = np.ascontiguousarray(cell_dofs, dtype=np.int64)
+
+    def _setup_forms(self) -> None:
+        mesh = self.mesh
+        mat_ids = self.dmesh.cell_tags_material
+        self.dx = ufl.Measure("dx", domain=mesh, subdomain_data=mat_ids)
+        self.ds = ufl.Measure("ds", domain=mesh)
+        u = self.u
+        w = ufl.TestFunction(self.V)
+        self.w_const = dolfinx.fem.Constant(mesh, self.width)
+        self.lam: dict[int, dolfinx.fem.Constant] = {}
+        self.mu: dict[int, dolfinx.fem.Constant] = {}
+        self.rho: dict[int, dolfinx.fem.Constant] = {}
+        H = ufl.grad(u)
+        F = ufl.Identity(2) + H
+        E = green_lagrange(H)
+        f_int = 0
+        energy = 0
+        for mid, name in enumerate(self.blocks.material_names):
+            lam, mu = lame_parameters(self.materials[name], self.hypothesis)
+            self.lam[mid] = dolfinx.fem.Constant(mesh, lam)
+            self.mu[mid] = dolfinx.fem.Constant(mesh, mu)
+            self.rho[mid] = dolfinx.fem.Constant(mesh, self.materials[name].density)
+            S = svk_second_piola(E, self.lam[mid], self.mu[mid])
+            f_int += ufl.inner(F * S, ufl.grad(w)) * self.w_const * self.dx(mid)
+            energy += svk_energy_density(E, self.lam[mid], self.mu[mid]) * self.w_const * self.dx(
+                mid
+            )
+        self.f_int_form = dolfinx.fem.form(f_int)
+        self.energy_form = dolfinx.fem.form(energy)
+        self._constants = dolfinx.fem.pack_constants(self.f_int_form)
+        self._coeffs = dolfinx.fem.pack_coefficients(self.f_int_form)
+        # index of each packed coefficient entry into u.x.array: pack a known field
+        arr = self.u.x.array
+        saved = arr.copy()
+        arr[:] = np.arange(arr.size, dtype=arr.dtype)
+        probe = dolfinx.fem.pack_coefficients(self.f_int_form)
+        arr[:] = saved
+        self._gather = {}
+        for key, packed in probe.items():
+            idx = np.rint(packed).astype(np.int64).ravel()
+            if not np.allclose(packed.ravel(), idx):
+                raise RuntimeError("unexpected coefficient packing (non-permutation)")
+            self._gather[key] = idx
+        # Cauchy stress per cell for output: one expression per material on its cells
+        self.S_space = dolfinx.fem.functionspace(mesh, ("DG", 0, (2, 2)))
+        self.stress = dolfinx.fem.Function(self.S_space, name="stress")
+        self._stress_expr = []
+        for mid in range(len(self.blocks.material_names)):
+            cells = np.flatnonzero(self.dmesh.cell_material == mid).astype(np.int32)
+            S = svk_second_piola(E, self.lam[mid], self.mu[mid])
+            expr = dolfinx.fem.Expression(
+                cauchy_stress(F, S), self.S_space.element.interpolation_points
+            )
+            self._stress_expr.append((cells, expr))
+
+    def _setup_mass(self) -> None:
+        w = ufl.TestFunction(self.V)
+        ones = dolfinx.fem.Constant(self.mesh, np.ones(2))
+        form = 0
+        for mid in self.rho:
+            form += self.rho[mid] * self.w_const * ufl.dot(ones, w) * self.dx(mid)
+        # row sum of the consistent mass = the lumped mass (exact for P1 triangles)
+        self.mass = self._assemble(form)
+        if np.any(self.mass <= 0):
+            raise ValueError("a node has zero lumped mass (degenerate element?)")
+        self.minv = 1.0 / self.mass
+
+    def _assemble(self, form) -> np.ndarray:
+        vec = dolfinx.fem.assemble_vector(dolfinx.fem.form(form))
+        vec.scatter_reverse(dolfinx.la.InsertMode.add)
+        vec.scatter_forward()
+        return vec.array.copy()
+
+    # ------------------------------------------------------------------ selection
+    def select_blocks(self, sel: BlockSelection) -> np.ndarray:
+        """Block ids of a selection (see :data:`BlockSelection`)."""
+        names = self.blocks.block_names
+        if callable(sel):
+            ids = [b for b in range(len(names)) if sel(self.blocks.block_centroid[b])]
+        else:
+            items = [sel] if isinstance(sel, str | int | np.integer) else list(sel)
+            ids = []
+            for item in items:
+                if isinstance(item, str):
+                    hits = [b for b, n in enumerate(names) if fnmatch.fnmatchcase(n, item)]
+                    if not hits:
+                        raise ValueError(f"no block named {item!r}")
+                    ids.extend(hits)
+                else:
+                    b = int(item)
+                    if not 0 <= b < len(names):
+                        raise ValueError(f"block id {b} out of range 0..{len(names) - 1}")
+                    ids.append(b)
+        if not ids:
+            raise ValueError(f"selection {sel!r} matches no block")
+        return np.unique(np.asarray(ids, dtype=np.int32))
+
+    def _block_nodes(self, sel: BlockSelection) -> np.ndarray:
+        ids = self.select_blocks(sel)
+        return np.flatnonzero(np.isin(self.node_block, ids)).astype(np.int64)
+
+    # ------------------------------------------------------------------ loads
+    def add_gravity(self, g: Sequence[float] = (0.0, -G), *, live: bool = False) -> None:
+        """Self-weight ρ g per unit volume; ``g`` [m/s²]. Dead load unless ``live``."""
+        w = ufl.TestFunction(self.V)
+        gc = dolfinx.fem.Constant(self.mesh, np.asarray(g, dtype=float))
+        form = 0
+        for mid in self.rho:
+            form += self.rho[mid] * self.w_const * ufl.dot(gc, w) * self.dx(mid)
+        self._add_load(self._assemble(form), live)
+
+    def add_point_load(
+        self, point: Sequence[float], force: Sequence[float], *, live: bool = True,
+        blocks: BlockSelection | None = None,
+    ) -> None:
+        """A force [N] (whole width) at the node nearest to ``point`` [m].
+
+        Args:
+            point: (x, y) location [m].
+            force: (Fx, Fy) [N].
+            live: scaled by the load factor (dynamic relaxation) if True.
+            blocks: restrict the search to these blocks.
+        """
+        node = self._nearest_node(point, blocks)
+        f = np.zeros_like(self.f_int)
+        if node >= 0:
+            f[2 * node : 2 * node + 2] = np.asarray(force, dtype=float)
+        self._add_load(f, live)
+
+    def add_line_load(
+        self, where: Callable[[np.ndarray], np.ndarray], q: Sequence[float], *,
+        live: bool = True,
+    ) -> None:
+        """A distributed load q [N/m] (force per metre of block boundary, whole width).
+
+        Args:
+            where: ``where(x)`` with x of shape (2, n) facet midpoints → bool mask; block
+                boundary facets selected by it carry the load.
+            q: (qx, qy) [N/m].
+            live: scaled by the load factor if True.
+        """
+        facets = self._boundary_facets(where)
+        tags = dolfinx.mesh.meshtags(
+            self.mesh, 1, facets, np.ones(facets.size, dtype=np.int32)
+        )
+        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
+        qc = dolfinx.fem.Constant(self.mesh, np.asarray(q, dtype=float))
+        w = ufl.TestFunction(self.V)
+        self._add_load(self._assemble(ufl.dot(qc, w) * ds(1)), live)
+
+    def add_pressure(
+        self, where: Callable[[np.ndarray], np.ndarray], p: float, *, live: bool = True
+    ) -> None:
+        """A pressure p [Pa] on the selected boundary facets (acting against the outward
+        reference normal, over the out-of-plane width)."""
+        facets = self._boundary_facets(where)
+        tags = dolfinx.mesh.meshtags(
+            self.mesh, 1, facets, np.ones(facets.size, dtype=np.int32)
+        )
+        ds = ufl.Measure("ds", domain=self.mesh, subdomain_data=tags)
+        n = ufl.FacetNormal(self.mesh)
+        pc = dolfinx.fem.Constant(self.mesh, float(p))
+        w = ufl.TestFunction(self.V)
+        self._add_load(self._assemble(-pc * self.w_const * ufl.dot(n, w) * ds(1)), live)
+
+    def _boundary_facets(self, where) -> np.ndarray:
+        facets = dolfinx.mesh.locate_entities_boundary(
+            self.mesh, 1, lambda x: np.asarray(where(x[:2]), dtype=bool)
+        )
+        n = self.comm.allreduce(facets.size)
+        if n == 0:
+            raise ValueError("the line-load locator selects no block boundary facet")
+        return facets.astype(np.int32)
+
+    def _add_load(self, f: np.ndarray, live: bool) -> None:
+        if live:
+            self.f_live += f
+        else:
+            self.f_dead += f
+
+    def external_force(self, load_factor: float = 1.0, out: np.ndarray | None = None):
+        """f_ext = f_dead + load_factor · f_live [N] (local dofs)."""
+        if out is None:
+            out = np.empty_like(self.f_dead)
+        np.multiply(self.f_live, load_factor, out=out)
+        out += self.f_dead
+        return out
+
+    # ------------------------------------------------------------------ supports
+    def fix_blocks(self, sel: BlockSelection, name: str | None = None) -> Prescription:
+        """Hold the selected blocks fixed (a support block, an abutment)."""
+        return self.prescribe_velocity(sel, (0.0, 0.0), name=name or f"fixed:{sel}")
+
+    def prescribe_velocity(
+        self,
+        sel: BlockSelection,
+        velocity: Sequence[float | None] | Callable[[float], Sequence[float]],
+        name: str | None = None,
+    ) -> Prescription:
+        """Move the selected blocks with a prescribed velocity [m/s] (a loading platen).
+
+        ``velocity`` is (vx, vy) with ``None`` for a free component, or a function of time.
+        The reaction force on the prescription is reported by the solvers.
+        """
+        return self._prescribe(self._block_nodes(sel), velocity, name or f"velocity:{sel}")
+
+    def fix(
+        self,
+        where: Callable[[np.ndarray], np.ndarray],
+        components: Sequence[int] = (0, 1),
+        name: str = "fixed",
+    ) -> Prescription:
+        """Fix the given components of the nodes where ``where(X)`` is True (X: (2, n) [m])."""
+        nodes = np.flatnonzero(np.asarray(where(self.X.T), dtype=bool))
+        if self.comm.allreduce(nodes.size) == 0:
+            raise ValueError(f"support {name!r}: the locator selects no node")
+        vel = [None, None]
+        for c in components:
+            vel[c] = 0.0
+        return self._prescribe(nodes.astype(np.int64), vel, name)
+
+    def _prescribe(self, nodes, velocity, name) -> Prescription:
+        if not callable(velocity):
+            if len(velocity) != 2:
+                raise ValueError("a velocity has two components (vx, vy)")
+            comps = [c for c in range(2) if velocity[c] is not None]
+        else:
+            comps = [0, 1]
+        comps = np.asarray(comps, dtype=np.int64)
+        dofs = (2 * nodes[:, None] + comps[None, :]).ravel()
+        p = Prescription(name, dofs, np.tile(comps, nodes.size), velocity)
+        self.prescriptions.append(p)
+        return p
+
+    def prescribed_arrays(self, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """The int8 mask of prescribed dofs and their velocities [m/s] at time t."""
+        mask = np.zeros(self.f_int.size, dtype=np.int8)
+        vp = np.zeros(self.f_int.size)
+        for p in self.prescriptions:
+            mask[p.dofs] = 1
+            vp[p.dofs] = p.value(t)
+        return mask, vp
+
+    # ------------------------------------------------------------------ monitors
+    def monitor(self, name: str, point: Sequence[float], blocks=None) -> None:
+        """Record the displacement [m] of the node nearest ``point`` in the history."""
+        node = self._nearest_node(point, blocks)
+        owner = self.comm.allreduce(self.comm.rank if node >= 0 else -1, op=MPI.MAX)
+        self.monitors[name] = (owner, node)
+
+    def monitor_values(self) -> dict[str, np.ndarray]:
+        """Monitored displacements (ux, uy) [m], the same on every rank."""
+        out = {}
+        for name, (owner, node) in self.monitors.items():
+            val = None
+            if self.comm.rank == owner:
+                val = self.u.x.array[2 * node : 2 * node + 2].copy()
+            out[name] = self.comm.bcast(val, root=owner)
+        return out
+
+    def _nearest_node(self, point, blocks=None) -> int:
+        """Local index of the globally nearest node, or -1 if it lives on another rank."""
+        p = np.asarray(point, dtype=float)
+        cand = np.arange(self.n_nodes) if blocks is None else self._block_nodes(blocks)
+        if cand.size:
+            d = np.linalg.norm(self.X[cand] - p, axis=1)
+            k = int(np.argmin(d))
+            best = (float(d[k]), int(self.node_input[cand[k]]))
+        else:
+            best = (np.inf, -1)
+        glob = self.comm.allreduce(best, op=MPI.MIN)
+        if glob[1] < 0:
+            raise ValueError(f"no node found near {tuple(p)}")
+        hit = np.flatnonzero(self.node_input == glob[1])
+        return int(hit[0]) if hit.size else -1
+
+    # ------------------------------------------------------------------ physics
+    def internal_force(self, out: np.ndarray | None = None) -> np.ndarray:
+        """Assemble f_int(u) [N] into ``out`` (preallocated; local dofs, no ghosts)."""
+        if out is None:
+            out = self.f_int
+        arr = self.u.x.array
+        for key, idx in self._gather.items():
+            packed = self._coeffs[key]
+            K.gather(arr, idx, packed.reshape(-1))
+        out.fill(0.0)
+        _cpp.fem.assemble_vector(out, self.f_int_form._cpp_object, self._constants, self._coeffs)
+        return out
+
+    def update_constants(self) -> None:
+        """Re-pack the form constants after changing a material Constant."""
+        self._constants = dolfinx.fem.pack_constants(self.f_int_form)
+
+    def strain_energy(self) -> float:
+        """Exact stored strain energy ∫ W(E) w dX [J] (collective)."""
+        local = dolfinx.fem.assemble_scalar(self.energy_form)
+        return self.comm.allreduce(local)
+
+    def kinetic_energy(self, v: np.ndarray | None = None) -> float:
+        """½ Σ m v² [J] (collective)."""
+        v = self.v if v is None else v
+        return self.comm.allreduce(0.5 * float(np.dot(self.mass, v * v)))
+
+    def total_mass(self) -> float:
+        """Total mass [kg] (collective): Σ of the lumped mass of the x-dofs."""
+        return self.comm.allreduce(float(self.mass[0::2].sum()))
+
+    def update_stress(self) -> dolfinx.fem.Function:
+        """Evaluate the Cauchy stress [Pa] per cell into ``self.stress``."""
+        arr = self.stress.x.array.reshape(-1, 4)
+        for cells, expr in self._stress_expr:
+            if cells.size:
+                arr[cells] = expr.eval(self.mesh, cells).reshape(cells.size, 4)
+        return self.stress
+
+    def element_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per-cell largest ω² [1/s²] and per-dof Σ_j|K_ij| [N/m] of the linear stiffness."""
+        nc = self.cell_nodes.shape[0]
+        lam = np.empty(nc)
+        mu = np.empty(nc)
+        rho = np.empty(nc)
+        for mid in self.lam:
+            cells = self.dmesh.cell_material == mid
+            lam[cells] = self.lam[mid].value
+            mu[cells] = self.mu[mid].value
+            rho[cells] = self.rho[mid].value
+        omega2 = np.zeros(nc)
+        rowsum = np.zeros(self.f_int.size)
+        K.p1_element_bounds(
+            np.ascontiguousarray(self.X), self.cell_nodes, lam, mu, rho, self.width, omega2,
+            rowsum,
+        )
+        return omega2, rowsum
+
+    def stable_time_step(self) -> float:
+        """Critical explicit time step 2/ω_max [s] of the undamped blocks (collective)."""
+        omega2, _ = self.element_bounds()
+        w2 = self.comm.allreduce(float(omega2.max()) if omega2.size else 0.0, op=MPI.MAX)
+        return 2.0 / np.sqrt(w2)
+
+    # ------------------------------------------------------------------ results
+    def gather_nodal(self, values: np.ndarray) -> np.ndarray:
+        """A nodal vector (2 per node) in the BlockMesh node order, on every rank."""
+        vals = values.reshape(-1, 2)[: self.n_nodes]
+        parts = self.comm.allgather((self.node_input, vals))
+        out = np.zeros((self.blocks.x.shape[0], 2))
+        for idx, v in parts:
+            out[idx] = v
+        return out
+
+    def displacement(self) -> np.ndarray:
+        """Displacement (n_nodes, 2) [m] in BlockMesh node order, on every rank."""
+        return self.gather_nodal(self.u.x.array)
+
+    def block_ranks(self) -> np.ndarray:
+        """Rank holding each block."""
+        return self.dmesh.block_rank
+
+    def reset(self) -> None:
+        """Zero displacement and velocity."""
+        self.u.x.array[:] = 0.0
+        self.v[:] = 0.0
+
+    def __repr__(self) -> str:
+        return (
+            f"Model({self.blocks.n_blocks} blocks, {self.blocks.n_cells} cells, "
+            f"{self.hypothesis.value}, width={self.width} m, ranks={self.comm.size})"
+        )
+

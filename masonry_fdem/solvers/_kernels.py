@@ -1,0 +1,169 @@
+"""Numba kernels of the solvers: flat arrays in, flat arrays out, no allocation per step.
+
+Array conventions (2D, block size 2): a nodal vector of ``n`` local nodes is a float64
+array of length ``2 n`` ordered (x0, y0, x1, y1, ...). ``presc`` is an int8 mask of the
+prescribed degrees of freedom; ``vp`` their prescribed velocities [m/s].
+"""
+
+import numpy as np
+from numba import njit
+
+# indices into the energy accumulator of the explicit step
+E_KINETIC = 0  # ½ m v² at the half step [J]
+E_INTERNAL = 1  # work done against internal forces (= strain energy if elastic) [J]
+E_EXTERNAL = 2  # work of applied loads [J]
+E_DAMPING = 3  # energy dissipated by mass-proportional damping [J]
+E_SUPPORT = 4  # work of the reactions at prescribed dofs [J]
+N_ENERGY = 5
+
+
+@njit(cache=True)
+def gather(src, index, out):
+    """out[k] = src[index[k]] (coefficient packing of the displacement)."""
+    for k in range(index.size):
+        out[k] = src[index[k]]
+
+
+@njit(cache=True)
+def central_difference_step(u, v, f_int, f_ext, mass, minv, presc, vp, damping, dt,
+                            reaction, energy):
+    """One central-difference step with lumped mass and mass-proportional damping.
+
+    On entry ``v`` holds v(n-1/2) and ``u`` holds u(n); on exit v(n+1/2) and u(n+1).
+    ``f_int``, ``f_ext`` are the forces at u(n) [N]. For prescribed dofs the velocity is
+    overwritten by ``vp`` and ``reaction`` receives the force the support applies [N].
+    ``energy`` (N_ENERGY,) accumulates the energy account; with the half-step kinetic
+    energy and midpoint work increments the discrete balance
+    K + W_int + W_damp − W_ext − W_support = K(0) holds to round-off.
+    """
+    a1 = 1.0 - 0.5 * damping * dt
+    a2 = 1.0 / (1.0 + 0.5 * damping * dt)
+    kin = 0.0
+    w_int = 0.0
+    w_ext = 0.0
+    w_damp = 0.0
+    w_sup = 0.0
+    for i in range(u.size):
+        vo = v[i]
+        g = f_ext[i] - f_int[i]
+        m = mass[i]
+        if presc[i]:
+            vn = vp[i]
+            r = m * (vn - vo) / dt + 0.5 * damping * m * (vn + vo) - g
+            reaction[i] = r
+            w_sup += r * 0.5 * (vn + vo) * dt
+        else:
+            vn = (a1 * vo + dt * g * minv[i]) * a2
+        vb = 0.5 * (vo + vn) * dt
+        w_int += f_int[i] * vb
+        w_ext += f_ext[i] * vb
+        w_damp += damping * m * 0.5 * (vn + vo) * vb
+        kin += 0.5 * m * vn * vn
+        v[i] = vn
+        u[i] += dt * vn
+    energy[E_KINETIC] = kin
+    energy[E_INTERNAL] += w_int
+    energy[E_EXTERNAL] += w_ext
+    energy[E_DAMPING] += w_damp
+    energy[E_SUPPORT] += w_sup
+
+
+@njit(cache=True)
+def dr_measure(u, u0, v, f_int, f_int0, f_ext, mfict, presc, out):
+    """Quantities of one dynamic-relaxation iteration, before the update.
+
+    out[0] = |r|² over free dofs; out[1] = Δxᵀ (f_int(u) − f_int(u0)) = Δxᵀ K_s Δx, the
+    numerator of the Rayleigh quotient with the secant stiffness K_s; out[2] = Δxᵀ M Δx,
+    its denominator; out[3] = fictitious kinetic energy ½ Σ m v². Δx = u − u0 is the
+    displacement since the start of the load increment, the shape of the lowest mode the
+    iteration is converging along.
+    """
+    r2 = 0.0
+    num = 0.0
+    den = 0.0
+    ke = 0.0
+    for i in range(u.size):
+        if presc[i]:
+            continue
+        r = f_ext[i] - f_int[i]
+        r2 += r * r
+        dx = u[i] - u0[i]
+        num += dx * (f_int[i] - f_int0[i])
+        den += mfict[i] * dx * dx
+        ke += 0.5 * mfict[i] * v[i] * v[i]
+    out[0] = r2
+    out[1] = num
+    out[2] = den
+    out[3] = ke
+
+
+@njit(cache=True)
+def dr_update(u, v, f_int, f_ext, mfict, presc, c, dt, first):
+    """Underwood's DR update: v(n+1/2) = ((2 − c dt) v(n−1/2) + 2 dt r/m) / (2 + c dt).
+
+    With ``first`` the start-up v(1/2) = dt r / (2 m) is used. Prescribed dofs stay put.
+    """
+    for i in range(u.size):
+        if presc[i]:
+            v[i] = 0.0
+            continue
+        r = f_ext[i] - f_int[i]
+        if first:
+            vn = 0.5 * dt * r / mfict[i]
+        else:
+            vn = ((2.0 - c * dt) * v[i] + 2.0 * dt * r / mfict[i]) / (2.0 + c * dt)
+        v[i] = vn
+        u[i] += dt * vn
+
+
+@njit(cache=True)
+def p1_element_bounds(xy, cells, lam, mu, rho, width, omega2, rowsum):
+    """Stiffness bounds of linear elastic P1 triangles with lumped mass.
+
+    Args:
+        xy: (n_nodes, 2) reference coordinates [m] of the local nodes.
+        cells: (n_cells, 3) local node indices (dof = 2 node + component).
+        lam, mu, rho: (n_cells,) in-plane Lamé constants [Pa] and density [kg/m³].
+        width: out-of-plane width [m].
+        omega2: (n_cells,) out: largest ω² of the element (K_e φ = ω² M_e φ) [1/s²].
+        rowsum: (2 n_nodes,) out, accumulated: Σ_j |K_ij| (Gerschgorin bound) [N/m].
+
+    The largest element eigenvalue bounds the largest eigenvalue of the assembled system
+    (Irons' element eigenvalue inequality), so 2/√max(ω²) is a safe explicit time step.
+    """
+    B = np.zeros((3, 6))
+    D = np.zeros((3, 3))
+    for c in range(cells.shape[0]):
+        n0 = cells[c, 0]
+        n1 = cells[c, 1]
+        n2 = cells[c, 2]
+        x0, y0 = xy[n0, 0], xy[n0, 1]
+        x1, y1 = xy[n1, 0], xy[n1, 1]
+        x2, y2 = xy[n2, 0], xy[n2, 1]
+        det = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+        area = 0.5 * abs(det)
+        b = (y1 - y2, y2 - y0, y0 - y1)
+        g = (x2 - x1, x0 - x2, x1 - x0)
+        for k in range(3):
+            B[0, 2 * k] = b[k] / det
+            B[0, 2 * k + 1] = 0.0
+            B[1, 2 * k] = 0.0
+            B[1, 2 * k + 1] = g[k] / det
+            B[2, 2 * k] = g[k] / det
+            B[2, 2 * k + 1] = b[k] / det
+        D[0, 0] = lam[c] + 2.0 * mu[c]
+        D[1, 1] = lam[c] + 2.0 * mu[c]
+        D[0, 1] = lam[c]
+        D[1, 0] = lam[c]
+        D[2, 2] = mu[c]
+        K = (B.T @ D @ B) * (area * width)
+        m = rho[c] * area * width / 3.0
+        w = np.linalg.eigvalsh(K)
+        omega2[c] = w[-1] / m
+        for k in range(3):
+            node = cells[c, k]
+            for a in range(2):
+                s = 0.0
+                for j in range(6):
+                    s += abs(K[2 * k + a, j])
+                rowsum[2 * node + a] += s
