@@ -1,0 +1,99 @@
+"""Output files (CSV, VTX, PNG), the CLI and the demos at small size."""
+
+import csv
+import runpy
+import sys
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+from conftest import rectangle
+
+from masonry_fdem import Material, Model
+from masonry_fdem.geometry import mesh_blocks, write_msh
+from masonry_fdem.io import History, VTXOutput, plot_blocks
+from masonry_fdem.solvers import ExplicitSolver
+
+comm = MPI.COMM_WORLD
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture
+def shared_tmp(tmp_path):
+    """One temporary folder for all ranks (rank 0's)."""
+    return Path(comm.bcast(str(tmp_path), root=0))
+
+
+def test_history_vtx_png(shared_tmp):
+    blocks = mesh_blocks([rectangle(0, 0, 1.0, 0.2), rectangle(0, 0.5, 1.0, 0.7)],
+                         materials="b", mesh_size=0.05, comm=comm)
+    model = Model(blocks, {"b": Material(2000.0, 1e9, 0.2)}, comm=comm)
+    model.fix(lambda X: X[0] < 1e-9)
+    model.add_gravity()
+    model.monitor("tip", (1.0, 0.1))
+    solver = ExplicitSolver(model, damping=10.0)
+    out = shared_tmp / "run"
+    with History(out / "history.csv", comm) as hist, VTXOutput(model, out) as vtx:
+        def record(s):
+            e = s.energies()
+            hist.append({"time": s.t, "tip": s.model.monitor_values()["tip"],
+                         "kinetic": e.kinetic, "strain": e.internal,
+                         "external": e.external, "damping": e.damping})
+            vtx.write(s.t)
+        solver.run(steps=500, every=100, callback=record)
+    png = plot_blocks(model, out / "deformed.png", field="von_mises", scale=100.0)
+    png2 = plot_blocks(model, out / "blocks.png", field="block")
+    comm.barrier()
+    if comm.rank == 0:
+        with open(out / "history.csv") as f:
+            rows = list(csv.reader(f))
+        assert rows[0] == ["time", "tip_x", "tip_y", "kinetic", "strain", "external", "damping"]
+        assert len(rows) == 6
+        t = np.array([float(r[0]) for r in rows[1:]])
+        assert t[-1] == pytest.approx(500 * solver.dt)
+        assert float(rows[-1][2]) < 0  # the tip sags
+        for p in (png, png2):
+            data = Path(p).read_bytes()
+            assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+        for name in ("displacement.bp", "stress.bp"):
+            assert (out / name).is_dir() and any((out / name).iterdir())
+    assert hist.column("tip_y")[-1] == pytest.approx(model.monitor_values()["tip"][1])
+
+
+def test_settle_arch_demo_small(shared_tmp, monkeypatch, capsys):
+    out = shared_tmp / "demo"
+    monkeypatch.setattr(sys, "argv", ["settle_arch.py", "--mesh-size", "0.25", "--steps", "2",
+                                      "--out", str(out)])
+    runpy.run_path(str(ROOT / "demos" / "settle_arch.py"), run_name="__main__")
+    text = capsys.readouterr().out
+    if comm.rank == 0:
+        assert "crown settlement under self-weight" in text
+        line = [x for x in text.splitlines() if x.startswith("support reaction")][0]
+        words = line.split()
+        reaction, weight = float(words[2]), float(words[6])
+        assert reaction == pytest.approx(weight, rel=1e-4)
+        assert (out / "settled.png").exists() and (out / "history.csv").exists()
+
+
+def test_cli_info_and_settle(shared_tmp, capsys):
+    from masonry_fdem.cli import main
+
+    blocks = mesh_blocks([rectangle(0, 0, 1.0, 2.0), rectangle(2, 0, 3, 1)], materials="brick",
+                         names=["pier", "stub"], mesh_size=0.2, comm=comm)
+    path = shared_tmp / "piers.msh"
+    write_msh(blocks, path, comm=comm)
+    comm.barrier()
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    if comm.rank == 0:
+        assert "2 blocks" in out
+    code = main(["settle", str(path), "--material", "pier=2000,5e9,0.2",
+                 "--material", "stub=2000,5e9,0.2", "--steps", "1",
+                 "--out", str(shared_tmp / "settle")])
+    assert code == 0
+    assert main(["settle", str(shared_tmp / "missing.msh")]) == 2
+    err = capsys.readouterr().err
+    if comm.rank == 0:
+        assert "missing.msh" in err
