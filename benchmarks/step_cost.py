@@ -27,21 +27,25 @@ from masonry_fdem.geometry import mesh_blocks
 from masonry_fdem.solvers import ExplicitSolver
 
 
-def median_time(fn, reps: int, rounds: int = 7) -> float:
-    samples = []
+def median_times(fns, reps: int, rounds: int = 9) -> list[float]:
+    """Median time per call of each function; rounds interleave the functions so that
+    clock-frequency drift affects all of them alike."""
+    samples = [[] for _ in fns]
     for _ in range(rounds):
-        t0 = time.perf_counter()
-        for _ in range(reps):
-            fn()
-        samples.append((time.perf_counter() - t0) / reps)
-    return statistics.median(samples)
+        for k, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            for _ in range(reps):
+                fn()
+            samples[k].append((time.perf_counter() - t0) / reps)
+    return [statistics.median(s) for s in samples]
 
 
 def wall_blocks(n_cells_target: int):
     """Bricks 0.2 x 0.1 m, ~2 * (0.1/h)^2 * 2 cells each, arranged in a square wall."""
     brick_l, brick_h = 0.2, 0.1
     h = 0.025 if n_cells_target >= 5000 else 0.05
-    cells_per_brick = 2 * (brick_l / h) * (brick_h / h)
+    one = np.array([[0, 0], [brick_l, 0], [brick_l, brick_h], [0, brick_h]])
+    cells_per_brick = mesh_blocks([one], materials="brick", mesh_size=h).n_cells
     n_bricks = max(1, int(round(n_cells_target / cells_per_brick)))
     n_per_course = max(1, int(np.sqrt(n_bricks / 2)))
     courses = max(1, int(np.ceil(n_bricks / n_per_course)))
@@ -60,8 +64,9 @@ def measure(blocks, reps):
     model.add_gravity()
     solver = ExplicitSolver(model)
     solver.run(steps=5)  # warm up (JIT, caches)
-    bare = median_time(lambda: dolfinx.fem.assemble_vector(model.f_int_form), reps)
-    step = median_time(solver.step, reps)
+    bare, step = median_times(
+        [lambda: dolfinx.fem.assemble_vector(model.f_int_form), solver.step], reps
+    )
     return model, bare, step
 
 
