@@ -486,11 +486,15 @@ class Model:
         )
         return omega2, rowsum
 
-    def stable_time_step(self) -> float:
-        """Critical explicit time step 2/ω_max [s] of the undamped blocks (collective)."""
+    def stable_time_step(self, extra_omega2: float = 0.0) -> float:
+        """Critical explicit time step 2/ω_max [s] of the undamped blocks (collective).
+
+        ``extra_omega2`` [1/s²] bounds what other springs (contact penalties) add: the
+        largest eigenvalue of a sum is at most the sum of the largest eigenvalues.
+        """
         omega2, _ = self.element_bounds()
         w2 = self.comm.allreduce(float(omega2.max()) if omega2.size else 0.0, op=MPI.MAX)
-        return 2.0 / np.sqrt(w2)
+        return 2.0 / np.sqrt(w2 + extra_omega2)
 
     # ------------------------------------------------------------------ results
     def gather_nodal(self, values: np.ndarray) -> np.ndarray:

@@ -23,7 +23,13 @@ import dolfinx.mesh
 if TYPE_CHECKING:
     from masonry_fdem.geometry import BlockMesh
 
-__all__ = ["rcb_block_ranks", "create_block_mesh", "DistributedBlockMesh"]
+__all__ = [
+    "rcb_block_ranks",
+    "create_block_mesh",
+    "DistributedBlockMesh",
+    "NodeExchange",
+    "exchange_ids",
+]
 
 log = logging.getLogger(__name__)
 
@@ -156,3 +162,62 @@ def create_block_mesh(
         raise RuntimeError("a block was split between ranks")
     log.debug("rank %d holds %d blocks", comm.rank, dmesh.local_blocks.size)
     return dmesh
+
+
+class NodeExchange:
+    """Copies of nodal values between ranks, for contact across rank boundaries.
+
+    Each rank sends the values of some of its nodes to other ranks (``send[r]``: local
+    node indices whose values rank r receives, in an order both sides agree on), and
+    receives ``n_recv[r]`` ghost values from each rank r. ``forward`` sends owned values to
+    the ghost copies; ``reverse`` adds ghost contributions (forces) back to the owners. Both
+    are collective ``Alltoallv`` calls, so no tags are needed.
+
+    Args:
+        comm: communicator.
+        send: per rank, the local node indices to send (int64 arrays; empty for self).
+        n_recv: per rank, the number of ghost nodes received.
+    """
+
+    def __init__(self, comm: MPI.Comm, send: list[np.ndarray], n_recv: list[int]):
+        self.comm = comm
+        self.send_nodes = np.concatenate([np.asarray(s, dtype=np.int64) for s in send]) \
+            if send else np.zeros(0, dtype=np.int64)
+        self.send_counts = np.array([len(s) for s in send], dtype=np.int64)
+        self.recv_counts = np.asarray(n_recv, dtype=np.int64)
+        self.n_ghost = int(self.recv_counts.sum())
+
+    def _displ(self, counts, width):
+        c = counts * width
+        return c, np.concatenate([[0], np.cumsum(c)[:-1]])
+
+    def forward(self, values: np.ndarray, out: np.ndarray) -> None:
+        """values: (n_local, w) owned values → out: (n_ghost, w) ghost copies."""
+        w = values.shape[1]
+        sbuf = np.ascontiguousarray(values[self.send_nodes])
+        sc, sd = self._displ(self.send_counts, w)
+        rc, rd = self._displ(self.recv_counts, w)
+        self.comm.Alltoallv([sbuf, (sc, sd), MPI.DOUBLE], [out, (rc, rd), MPI.DOUBLE])
+
+    def reverse(self, ghost_values: np.ndarray, out: np.ndarray) -> None:
+        """ghost_values: (n_ghost, w) contributions → added to out: (n_local, w) owners."""
+        w = ghost_values.shape[1]
+        sbuf = np.ascontiguousarray(ghost_values)
+        rbuf = np.zeros((self.send_nodes.size, w))
+        sc, sd = self._displ(self.recv_counts, w)
+        rc, rd = self._displ(self.send_counts, w)
+        self.comm.Alltoallv([sbuf, (sc, sd), MPI.DOUBLE], [rbuf, (rc, rd), MPI.DOUBLE])
+        np.add.at(out, self.send_nodes, rbuf)
+
+
+def exchange_ids(comm: MPI.Comm, send: list[np.ndarray]) -> list[np.ndarray]:
+    """Send ``send[r]`` (int64 arrays) to each rank r; returns what each rank sent here."""
+    counts = np.array([len(s) for s in send], dtype=np.int64)
+    recv_counts = np.zeros_like(counts)
+    comm.Alltoall(counts, recv_counts)
+    sbuf = np.concatenate(send).astype(np.int64) if len(send) else np.zeros(0, np.int64)
+    rbuf = np.zeros(int(recv_counts.sum()), dtype=np.int64)
+    sd = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rd = np.concatenate([[0], np.cumsum(recv_counts)[:-1]])
+    comm.Alltoallv([sbuf, (counts, sd), MPI.INT64_T], [rbuf, (recv_counts, rd), MPI.INT64_T])
+    return [rbuf[rd[r] : rd[r] + recv_counts[r]] for r in range(comm.size)]

@@ -35,3 +35,42 @@ def linear_static_solution(model, load_factor: float = 1.0) -> np.ndarray:
     if free.size:
         x[free] = spla.spsolve(A[free][:, free].tocsc(), b[free])
     return model.gather_nodal(x)
+
+
+def sweep_pairs(boxes: np.ndarray, group: np.ndarray | None = None) -> np.ndarray:
+    """All pairs i < j of meeting boxes (closed), excluding equal groups: sort-and-sweep
+    along the first axis, an exact method independent of the ADT. (m, 2) sorted."""
+    b = np.asarray(boxes, dtype=float)
+    n = b.shape[0]
+    g = np.full(n, -1) if group is None else np.asarray(group)
+    return _sweep(b, np.asarray(g, dtype=np.int64))
+
+
+def _sweep(b, g):
+    from numba import njit
+
+    @njit(cache=False)
+    def kernel(b, g, order):
+        d = b.shape[1] // 2
+        out = []
+        n = b.shape[0]
+        for a in range(n):
+            i = order[a]
+            for c in range(a + 1, n):
+                j = order[c]
+                if b[j, 0] > b[i, d]:
+                    break
+                if g[i] >= 0 and g[i] == g[j]:
+                    continue
+                ok = True
+                for k in range(d):
+                    if b[i, k] > b[j, d + k] or b[j, k] > b[i, d + k]:
+                        ok = False
+                        break
+                if ok:
+                    out.append((min(i, j), max(i, j)))
+        return out
+
+    order = np.argsort(b[:, 0], kind="stable")
+    pairs = np.array(kernel(b, g, order), dtype=np.int64).reshape(-1, 2)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]

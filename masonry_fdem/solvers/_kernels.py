@@ -14,7 +14,8 @@ E_INTERNAL = 1  # work done against internal forces (= strain energy if elastic)
 E_EXTERNAL = 2  # work of applied loads [J]
 E_DAMPING = 3  # energy dissipated by mass-proportional damping [J]
 E_SUPPORT = 4  # work of the reactions at prescribed dofs [J]
-N_ENERGY = 5
+E_CONTACT = 5  # work of the contact forces [J]
+N_ENERGY = 6
 
 
 @njit(cache=True)
@@ -25,16 +26,17 @@ def gather(src, index, out):
 
 
 @njit(cache=True)
-def central_difference_step(u, v, f_int, f_ext, mass, minv, presc, vp, damping, dt,
+def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, damping, dt,
                             reaction, energy):
     """One central-difference step with lumped mass and mass-proportional damping.
 
     On entry ``v`` holds v(n-1/2) and ``u`` holds u(n); on exit v(n+1/2) and u(n+1).
-    ``f_int``, ``f_ext`` are the forces at u(n) [N]. For prescribed dofs the velocity is
+    ``f_int``, ``f_ext``, ``f_con`` are the internal, applied and contact forces at u(n)
+    [N]. For prescribed dofs the velocity is
     overwritten by ``vp`` and ``reaction`` receives the force the support applies [N].
     ``energy`` (N_ENERGY,) accumulates the energy account; with the half-step kinetic
     energy and midpoint work increments the discrete balance
-    K + W_int + W_damp − W_ext − W_support = K(0) holds to round-off.
+    K + W_int + W_damp − W_ext − W_support − W_contact = K(0) holds to round-off.
     """
     a1 = 1.0 - 0.5 * damping * dt
     a2 = 1.0 / (1.0 + 0.5 * damping * dt)
@@ -43,9 +45,10 @@ def central_difference_step(u, v, f_int, f_ext, mass, minv, presc, vp, damping, 
     w_ext = 0.0
     w_damp = 0.0
     w_sup = 0.0
+    w_con = 0.0
     for i in range(u.size):
         vo = v[i]
-        g = f_ext[i] - f_int[i]
+        g = f_ext[i] + f_con[i] - f_int[i]
         m = mass[i]
         if presc[i]:
             vn = vp[i]
@@ -57,6 +60,7 @@ def central_difference_step(u, v, f_int, f_ext, mass, minv, presc, vp, damping, 
         vb = 0.5 * (vo + vn) * dt
         w_int += f_int[i] * vb
         w_ext += f_ext[i] * vb
+        w_con += f_con[i] * vb
         w_damp += damping * m * 0.5 * (vn + vo) * vb
         kin += 0.5 * m * vn * vn
         v[i] = vn
@@ -66,6 +70,7 @@ def central_difference_step(u, v, f_int, f_ext, mass, minv, presc, vp, damping, 
     energy[E_EXTERNAL] += w_ext
     energy[E_DAMPING] += w_damp
     energy[E_SUPPORT] += w_sup
+    energy[E_CONTACT] += w_con
 
 
 @njit(cache=True)

@@ -68,6 +68,9 @@ class DynamicRelaxation:
         ke_tol: fictitious kinetic energy tolerance relative to its peak in the increment.
         max_iter: iteration limit per load increment.
         mass_safety: α in the fictitious mass bound (≥ 1).
+        contact: a :class:`~masonry_fdem.contact.BlockContact`, or None. Its penalty
+            springs enter the fictitious masses; its forces (without restitution damping)
+            enter the residual; friction slips by the fictitious displacement increments.
     """
 
     def __init__(
@@ -78,6 +81,7 @@ class DynamicRelaxation:
         ke_tol: float = 1e-10,
         max_iter: int = 200_000,
         mass_safety: float = 1.1,
+        contact=None,
     ):
         if not rtol > 0:
             raise ValueError(f"rtol must be > 0, got {rtol}")
@@ -89,6 +93,9 @@ class DynamicRelaxation:
         self.max_iter = int(max_iter)
         self.dt = 1.0
         _, rowsum = model.element_bounds()
+        self.contact = contact
+        if contact is not None:
+            rowsum = rowsum + contact.stiffness_rowsum()
         self.mfict = mass_safety * 0.25 * self.dt**2 * rowsum
         if np.any(self.mfict <= 0):
             raise ValueError("a dof has no stiffness: is a node not attached to any element?")
@@ -96,6 +103,7 @@ class DynamicRelaxation:
         self.v = np.zeros_like(model.f_int)
         self.f_int0 = np.zeros_like(model.f_int)
         self.f_ext = np.zeros_like(model.f_int)
+        self.f_net = np.zeros_like(model.f_int)  # f_int − f_contact
         self._sums = np.zeros(4)
         self.results: list[DRResult] = []
 
@@ -116,12 +124,12 @@ class DynamicRelaxation:
         it = 0
         converged = False
         for it in range(1, self.max_iter + 1):
-            m.internal_force(m.f_int)
+            f_net = self._resisting_force()
             if it == 1:
-                self.f_int0[:] = m.f_int
+                self.f_int0[:] = f_net
                 if ref == 0.0:
-                    ref = math.sqrt(comm.allreduce(float(np.dot(m.f_int, m.f_int)))) or 1.0
-            K.dr_measure(u, u0, self.v, m.f_int, self.f_int0, self.f_ext, self.mfict,
+                    ref = math.sqrt(comm.allreduce(float(np.dot(f_net, f_net)))) or 1.0
+            K.dr_measure(u, u0, self.v, f_net, self.f_int0, self.f_ext, self.mfict,
                          self.presc, self._sums)
             r2, num, den, ke = comm.allreduce(self._sums)
             r_norm = math.sqrt(r2)
@@ -137,7 +145,7 @@ class DynamicRelaxation:
                 c = min(2.0 * math.sqrt(num / den), 1.9 / self.dt)
             else:
                 c = 0.0
-            K.dr_update(u, self.v, m.f_int, self.f_ext, self.mfict, self.presc, c, self.dt,
+            K.dr_update(u, self.v, f_net, self.f_ext, self.mfict, self.presc, c, self.dt,
                         it == 1)
         res = DRResult(float(load_factor), converged, it, r_norm, ref)
         self.results.append(res)
@@ -148,6 +156,18 @@ class DynamicRelaxation:
                 res.relative_residual,
             )
         return res
+
+    def _resisting_force(self) -> np.ndarray:
+        """f_int(u) − f_contact(u) [N]: what the applied loads must balance."""
+        m = self.model
+        m.internal_force(m.f_int)
+        if self.contact is None:
+            return m.f_int
+        self.contact.update_neighbours(self.v, self.dt)
+        np.negative(m.f_int, out=self.f_net)
+        self.contact.add_forces(self.f_net, self.v, self.dt, damping=False)
+        np.negative(self.f_net, out=self.f_net)
+        return self.f_net
 
     def load_steps(
         self,
@@ -173,10 +193,10 @@ class DynamicRelaxation:
     def reactions(self) -> dict[str, np.ndarray]:
         """Reaction (Rx, Ry) [N] of each prescription: f_int − f_ext at its dofs."""
         m = self.model
-        m.internal_force(m.f_int)
+        f_net = self._resisting_force()
         out = {}
         for p in m.prescriptions:
             r = np.zeros(2)
-            np.add.at(r, p.components, m.f_int[p.dofs] - self.f_ext[p.dofs])
+            np.add.at(r, p.components, f_net[p.dofs] - self.f_ext[p.dofs])
             out[p.name] = m.comm.allreduce(r)
         return out

@@ -37,9 +37,11 @@ class UnstableTimeStepError(ValueError):
 class EnergyAccount:
     """Energies [J] since the start of the run (global over ranks).
 
-    ``balance`` = kinetic + internal + damping − external − support − initial kinetic,
-    zero up to round-off for the central-difference identity; ``internal`` is the work
-    done against the internal forces, i.e. the strain energy for an elastic body.
+    ``balance`` = kinetic + internal + damping − external − support − contact − initial
+    kinetic, zero up to round-off for the central-difference identity; ``internal`` is the
+    work done against the internal forces, i.e. the strain energy for an elastic body;
+    ``contact`` is the work done BY the contact forces (minus the stored penalty energy and
+    the frictional and contact-damping dissipation).
     """
 
     kinetic: float
@@ -47,6 +49,7 @@ class EnergyAccount:
     external: float
     damping: float
     support: float
+    contact: float
     balance: float
 
 
@@ -59,6 +62,8 @@ class ExplicitSolver:
         safety: fraction of the critical step used when ``dt`` is None.
         damping: mass-proportional damping coefficient α [1/s] (f_damp = α M v).
         load_factor: factor on the live loads (constant, or a function of time).
+        contact: a :class:`~masonry_fdem.contact.BlockContact`, or None (blocks do not
+            interact). Its penalty springs are included in the stable time step.
 
     Raises:
         UnstableTimeStepError: ``dt`` exceeds the critical time step.
@@ -72,9 +77,13 @@ class ExplicitSolver:
         safety: float = DT_SAFETY,
         damping: float = 0.0,
         load_factor: float | Callable[[float], float] = 1.0,
+        contact=None,
     ):
         self.model = model
-        self.dt_critical = model.stable_time_step()
+        self.contact = contact
+        self.dt_critical = model.stable_time_step(
+            extra_omega2=contact.stable_omega2() if contact is not None else 0.0
+        )
         if dt is None:
             if not 0 < safety <= 1:
                 raise ValueError(f"time-step safety factor must be in (0, 1], got {safety}")
@@ -97,6 +106,7 @@ class ExplicitSolver:
         self._timed = [p for p in model.prescriptions if p.time_dependent]
         self.f_ext = model.external_force(self._factor(0.0))
         self.reaction = np.zeros_like(self.f_ext)
+        self.f_con = np.zeros_like(self.f_ext)
         self.energy = np.zeros(K.N_ENERGY)
         self.kinetic0 = model.kinetic_energy()
         if model.comm.rank == 0:
@@ -118,9 +128,13 @@ class ExplicitSolver:
         if callable(self.load_factor):
             m.external_force(self._factor(self.t), out=self.f_ext)
         m.internal_force(self.model.f_int)
+        if self.contact is not None:
+            self.contact.update_neighbours(m.v, self.dt)
+            self.f_con.fill(0.0)
+            self.contact.add_forces(self.f_con, m.v, self.dt)
         K.central_difference_step(
-            m.u.x.array, m.v, m.f_int, self.f_ext, m.mass, m.minv, self.presc, self.vp,
-            self.damping, self.dt, self.reaction, self.energy,
+            m.u.x.array, m.v, m.f_int, self.f_ext, self.f_con, m.mass, m.minv, self.presc,
+            self.vp, self.damping, self.dt, self.reaction, self.energy,
         )
         self.t += self.dt
         self.n += 1
@@ -174,12 +188,13 @@ class ExplicitSolver:
         e = self.model.comm.allreduce(self.energy.copy())
         bal = (
             e[K.E_KINETIC] + e[K.E_INTERNAL] + e[K.E_DAMPING]
-            - e[K.E_EXTERNAL] - e[K.E_SUPPORT] - self.kinetic0
+            - e[K.E_EXTERNAL] - e[K.E_SUPPORT] - e[K.E_CONTACT] - self.kinetic0
         )
         return EnergyAccount(
             kinetic=float(e[K.E_KINETIC]), internal=float(e[K.E_INTERNAL]),
             external=float(e[K.E_EXTERNAL]), damping=float(e[K.E_DAMPING]),
-            support=float(e[K.E_SUPPORT]), balance=float(bal),
+            support=float(e[K.E_SUPPORT]), contact=float(e[K.E_CONTACT]),
+            balance=float(bal),
         )
 
     def reactions(self) -> dict[str, np.ndarray]:

@@ -1,0 +1,398 @@
+"""Frictional facet-to-facet penalty contact between deformable blocks.
+
+:class:`BlockContact` finds candidate facet pairs with the alternating digital tree every
+few steps (boxes inflated by a travel margin), evaluates the penalty kernel on them every
+step and keeps the tangential (stick/slip) history of each pair across neighbour updates,
+keyed by the pair's global facet ids.
+
+Parameters (SI): the normal penalty ε_n [Pa/m] is traction per metre of penetration; by
+default ``penalty_factor · E_min / h`` with E_min the smaller Young's modulus of the pair
+and h the mean boundary facet length of the model, so a facet node's contact spring is
+comparable with the stiffness of its element. The tangential penalty is
+``tangential_ratio · ε_n``. Normal energy loss follows from the restitution coefficient e
+by hysteretic unloading (see ``_kernels``): a rigid impact rebounds with e times its
+approach velocity, for flat and for corner contact alike.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem.contact import _kernels as K
+
+__all__ = ["ContactSettings", "BlockContact", "restitution_damping_ratio"]
+# restitution_damping_ratio is kept for users of a viscous contact damper (disks)
+
+log = logging.getLogger(__name__)
+
+
+def restitution_damping_ratio(e: float) -> float:
+    """Damping ratio ζ of a linear spring–dashpot with restitution coefficient e."""
+    if not 0.0 < e <= 1.0:
+        raise ValueError(f"restitution coefficient must be in (0, 1], got {e}")
+    if e == 1.0:
+        return 0.0
+    le = math.log(e)
+    return -le / math.sqrt(math.pi**2 + le**2)
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    """Settings of the block contact.
+
+    Attributes:
+        friction: Coulomb friction coefficient μ = tan φ of every material pair not in
+            ``friction_table``.
+        friction_table: μ per pair of material names, e.g. ``{("brick", "base"): 0.4}``.
+        restitution: normal restitution coefficient e in (0, 1].
+        penalty: normal penalty ε_n [Pa/m]; None → ``penalty_factor · E_min / h``.
+        penalty_factor: factor of the default penalty.
+        tangential_ratio: ε_t / ε_n.
+        depth_factor: penetrations deeper than this fraction of the shorter facet of a
+            pair are ignored (keeps a facet from grabbing the far side of a thin block).
+        margin: travel margin [m] of the neighbour list; None → half the mean facet length.
+        rebuild_every: steps between neighbour-list rebuilds (sooner if the accumulated
+            travel could exceed the margin).
+    """
+
+    friction: float = 0.6
+    friction_table: Mapping[tuple[str, str], float] = field(default_factory=dict)
+    restitution: float = 1.0
+    penalty: float | None = None
+    penalty_factor: float = 1.0
+    tangential_ratio: float = 1.0
+    depth_factor: float = 0.5
+    margin: float | None = None
+    rebuild_every: int = 10
+
+    def __post_init__(self) -> None:
+        if self.friction < 0:
+            raise ValueError(f"friction coefficient must be >= 0, got {self.friction}")
+        for pair, mu in self.friction_table.items():
+            if mu < 0:
+                raise ValueError(f"friction coefficient of {pair} must be >= 0, got {mu}")
+        restitution_damping_ratio(self.restitution)
+        if self.penalty is not None and not self.penalty > 0:
+            raise ValueError(f"penalty must be > 0 Pa/m, got {self.penalty}")
+        if not self.penalty_factor > 0 or not self.tangential_ratio > 0:
+            raise ValueError("penalty_factor and tangential_ratio must be > 0")
+        if self.margin is not None and not self.margin > 0:
+            raise ValueError(f"margin must be > 0 m, got {self.margin}")
+        if self.rebuild_every < 1:
+            raise ValueError("rebuild_every must be >= 1")
+
+
+class BlockContact:
+    """Contact between the blocks of a model, across ranks too.
+
+    Every rank evaluates the pairs of its own facets and, for a facet of another rank
+    that falls within its inflated bounding box (a *ghost* facet), the pair is evaluated
+    by the lower of the two ranks and the forces on the ghost nodes are returned to their
+    owner. Ghost facets and nodes are found again at each neighbour-list rebuild; their
+    positions and velocities are refreshed every step.
+
+    Args:
+        model: the :class:`~masonry_fdem.model.Model`.
+        settings: contact settings.
+    """
+
+    def __init__(self, model, settings: ContactSettings | None = None):
+        self.model = model
+        self.settings = settings or ContactSettings()
+        s = self.settings
+        comm = model.comm
+        blocks = model.blocks
+        self.comm = comm
+        # ---- global facet tables (every rank knows the whole BlockMesh)
+        gf = np.asarray(blocks.boundary_facets, dtype=np.int64)
+        self.g_facets = gf
+        first = np.full(blocks.n_nodes, -1, dtype=np.int64)
+        first[gf[:, 0]] = np.arange(gf.shape[0])
+        self.g_next = first[gf[:, 1]]
+        if np.any(self.g_next < 0):
+            raise ValueError("block boundaries are not closed loops of facets")
+        self.g_prev = np.empty_like(self.g_next)
+        self.g_prev[self.g_next] = np.arange(gf.shape[0])
+        self.g_block = np.asarray(blocks.facet_block, dtype=np.int64)
+        self.g_material = blocks.block_material[self.g_block].astype(np.int64)
+        self.g_length = np.linalg.norm(blocks.x[gf[:, 1]] - blocks.x[gf[:, 0]], axis=1)
+        self.block_rank = model.block_ranks()
+        # ---- local facets: those of the blocks on this rank, by global id
+        self.local_gid = np.flatnonzero(self.block_rank[self.g_block] == comm.rank)
+        self.n_local_nodes = model.n_nodes
+        self.h = float(self.g_length.mean())
+        names = blocks.material_names
+        nm = len(names)
+        E = np.array([model.materials[n].E for n in names])
+        emin = np.minimum.outer(E, E)
+        self.eps_table = (
+            np.full((nm, nm), float(s.penalty)) if s.penalty else s.penalty_factor * emin / self.h
+        )
+        self.mu_table = np.full((nm, nm), s.friction)
+        for (a, b), mu in s.friction_table.items():
+            for name in (a, b):
+                if name not in names:
+                    raise ValueError(f"friction_table names unknown material {name!r}")
+            i, j = names.index(a), names.index(b)
+            self.mu_table[i, j] = self.mu_table[j, i] = mu
+        restitution_damping_ratio(s.restitution)  # validates e
+        self.hyst = 1.0 / s.restitution**2 - 1.0
+        self.margin = s.margin if s.margin is not None else 0.5 * self.h
+        # ---- state
+        self._work = np.zeros(K.N_WORK)
+        self._input_to_local = np.full(blocks.n_nodes, -1, dtype=np.int64)
+        self._input_to_local[model.node_input] = np.arange(model.n_nodes)
+        self.pairs = np.zeros((0, 2), dtype=np.int64)
+        self.tau = np.zeros((0, 2))
+        self.pmax = np.zeros((0, 2))
+        self.keys = np.zeros(0, dtype=np.int64)
+        self.energy = np.zeros(3)
+        self.dissipated = 0.0
+        self.travel = math.inf
+        self.since = 0
+        self.rebuilds = 0
+        self.exchange = None
+        self._build_extended(np.zeros(0, dtype=np.int64), [np.zeros(0, np.int64)] * comm.size)
+
+    # ------------------------------------------------------------------ extended arrays
+    def _build_extended(self, ghost_gid_sets, send_sets) -> None:
+        """Facet and node tables of local + ghost facets (and the ghosts' neighbours)."""
+        model = self.model
+        comm = self.comm
+        nloc = self.n_local_nodes
+        ghost_gid = np.unique(np.asarray(ghost_gid_sets, dtype=np.int64))
+        # phantom facets: the neighbours of ghost facets (needed by the corner rules)
+        extra = np.setdiff1d(np.r_[self.g_prev[ghost_gid], self.g_next[ghost_gid]],
+                             np.r_[ghost_gid, self.local_gid])
+        gids = np.r_[self.local_gid, ghost_gid, extra].astype(np.int64)
+        self.n_candidates = self.local_gid.size + ghost_gid.size
+        self.ext_gid = gids
+        # ghost nodes, grouped by owner rank in sorted input order (the owner agrees)
+        recv_nodes = []
+        for r in range(comm.size):
+            if r == comm.rank:
+                recv_nodes.append(np.zeros(0, np.int64))
+                continue
+            mine = gids[self.block_rank[self.g_block[gids]] == r]
+            recv_nodes.append(np.unique(self.g_facets[mine]))
+        ghost_nodes = np.concatenate(recv_nodes) if recv_nodes else np.zeros(0, np.int64)
+        node_map = self._input_to_local.copy()
+        node_map[ghost_nodes] = nloc + np.arange(ghost_nodes.size)
+        self.facets = np.ascontiguousarray(node_map[self.g_facets[gids]])
+        pos = np.full(self.g_facets.shape[0], -1, dtype=np.int64)
+        pos[gids] = np.arange(gids.size)
+        nxt = pos[self.g_next[gids]]
+        prv = pos[self.g_prev[gids]]
+        own = np.arange(gids.size)
+        # phantoms are never masters: their own neighbours may be absent
+        self.fnext = np.where(nxt >= 0, nxt, own).astype(np.int64)
+        self.fprev = np.where(prv >= 0, prv, own).astype(np.int64)
+        self.facet_block = self.g_block[gids]
+        self.facet_material = self.g_material[gids]
+        self.facet_length = self.g_length[gids]
+        self.facet_rank = self.block_rank[self.facet_block]
+        nn = nloc + ghost_nodes.size
+        self.X = np.zeros((nn, 2))
+        self.X[:nloc] = model.X
+        self.X[nloc:] = model.blocks.x[ghost_nodes]
+        self.u = np.zeros(2 * nn)
+        self.v = np.zeros(2 * nn)
+        self.f = np.zeros(2 * nn)
+        self.boxes = np.zeros((gids.size, 4))
+        if comm.size > 1:
+            # what this rank sends to r: the nodes of the facets r takes as ghosts,
+            # in r's order (sorted input ids)
+            send = []
+            for r in range(comm.size):
+                ids = send_sets[r]
+                nodes = np.unique(self.g_facets[np.r_[ids, self.g_prev[ids], self.g_next[ids]]])
+                nodes = nodes[self._input_to_local[nodes] >= 0]
+                send.append(self._input_to_local[nodes])
+            from masonry_fdem.parallel import NodeExchange
+
+            self.exchange = NodeExchange(comm, send, [len(n) for n in recv_nodes])
+            self._uv = np.zeros((nloc, 4))
+            self._ghost_uv = np.zeros((self.exchange.n_ghost, 4))
+
+    def _sync(self, v: np.ndarray) -> None:
+        """Current displacement and velocity of local and ghost nodes."""
+        nloc = 2 * self.n_local_nodes
+        self.u[:nloc] = self.model.u.x.array[:nloc]
+        self.v[:nloc] = v[:nloc]
+        if self.exchange is not None and self.comm.size > 1:
+            self._uv[:, :2] = self.model.u.x.array[:nloc].reshape(-1, 2)
+            self._uv[:, 2:] = v[:nloc].reshape(-1, 2)
+            self.exchange.forward(self._uv, self._ghost_uv)
+            self.u[nloc:] = self._ghost_uv[:, :2].ravel()
+            self.v[nloc:] = self._ghost_uv[:, 2:].ravel()
+
+    # ------------------------------------------------------------------ time step
+    def stable_omega2(self) -> float:
+        """Bound of ω² [1/s²] the contact springs add (collective)."""
+        m = self.model
+        nodes, ladj = self._local_adjacent_length()
+        eps = float(self.eps_table.max())
+        mn = m.mass[2 * nodes] if nodes.size else np.ones(1)
+        m_min = self.comm.allreduce(float(mn.min()), op=MPI.MIN)
+        w2 = eps * m.width * ladj[nodes] * (1.0 / mn + 1.0 / m_min) if nodes.size else [0.0]
+        return self.comm.allreduce(float(np.max(w2)), op=MPI.MAX)
+
+    def _local_adjacent_length(self):
+        m = self.model
+        fl = self._input_to_local[self.g_facets[self.local_gid]]
+        ladj = np.zeros(m.n_nodes)
+        np.add.at(ladj, fl[:, 0], self.g_length[self.local_gid])
+        np.add.at(ladj, fl[:, 1], self.g_length[self.local_gid])
+        return np.unique(fl), ladj
+
+    def stiffness_rowsum(self) -> np.ndarray:
+        """(2 n_nodes,) bound of Σ_j |K_ij| [N/m] of the contact springs (for the fictitious
+        masses of dynamic relaxation): 2 ε_n w (length of the node's facets)."""
+        _, ladj = self._local_adjacent_length()
+        k = 2.0 * float(self.eps_table.max()) * self.model.width * ladj
+        return np.repeat(k, 2)
+
+    # ------------------------------------------------------------------ neighbours
+    def rebuild(self, v: np.ndarray | None = None) -> None:
+        """New candidate pairs from the ADT; tangential history carried over by key.
+
+        Collective: ghost facets are exchanged between ranks.
+        """
+        from masonry_fdem.contact.adt import self_pairs
+        from masonry_fdem.parallel import exchange_ids
+
+        comm = self.comm
+        v = self.model.v if v is None else v
+        half = 0.5 * self.margin
+        if comm.size > 1:
+            # local facet boxes at the current positions -> this rank's inflated bbox
+            self._build_extended(np.zeros(0, np.int64), [np.zeros(0, np.int64)] * comm.size)
+            self._sync(v)
+            K.facet_boxes(self.X, self.u, self.facets, half, self.boxes)
+            nl = self.local_gid.size
+            lo = self.boxes[:nl, :2].min(axis=0) if nl else np.full(2, np.inf)
+            hi = self.boxes[:nl, 2:].max(axis=0) if nl else np.full(2, -np.inf)
+            bbs = comm.allgather(np.r_[lo - half, hi + half])
+            send = []
+            for r in range(comm.size):
+                if r == comm.rank or nl == 0:
+                    send.append(np.zeros(0, np.int64))
+                    continue
+                bb = bbs[r]
+                hit = np.all(self.boxes[:nl, :2] <= bb[2:], axis=1) & np.all(
+                    self.boxes[:nl, 2:] >= bb[:2], axis=1)
+                send.append(self.local_gid[hit])
+            received = exchange_ids(comm, send)
+            self._build_extended(np.concatenate(received), send)
+        self._sync(v)
+        K.facet_boxes(self.X, self.u, self.facets, half, self.boxes)
+        nc = self.n_candidates
+        pairs = np.asarray(self_pairs(np.ascontiguousarray(self.boxes[:nc]),
+                                      self.facet_block[:nc]), dtype=np.int64).reshape(-1, 2)
+        # each cross-rank pair is computed by the lower rank only; ghost-ghost never
+        ra = self.facet_rank[pairs[:, 0]]
+        rb = self.facet_rank[pairs[:, 1]]
+        me = comm.rank
+        keep = ((ra == me) & (rb == me)) | ((ra == me) & (rb > me)) | ((rb == me) & (ra > me))
+        pairs = pairs[keep]
+        # orient each pair by global facet id, so its two passes keep their meaning
+        ga = self.ext_gid[pairs[:, 0]]
+        gb = self.ext_gid[pairs[:, 1]]
+        swap = ga > gb
+        pairs[swap] = pairs[swap][:, ::-1]
+        n_g = self.g_facets.shape[0]
+        keys = np.minimum(ga, gb) * n_g + np.maximum(ga, gb)
+        tau = np.zeros((pairs.shape[0], 2))
+        pmax = np.zeros((pairs.shape[0], 2))
+        if self.keys.size and keys.size:
+            pos = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
+            hit = self.keys[pos] == keys
+            tau[hit] = self.tau[pos[hit]]
+            pmax[hit] = self.pmax[pos[hit]]
+        order = np.argsort(keys, kind="stable")
+        self.pairs = np.ascontiguousarray(pairs[order])
+        self.keys = keys[order]
+        self.tau = np.ascontiguousarray(tau[order])
+        self.pmax = np.ascontiguousarray(pmax[order])
+        ma = self.facet_material[self.pairs[:, 0]]
+        mb = self.facet_material[self.pairs[:, 1]]
+        self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
+        self.eps_t = self.settings.tangential_ratio * self.eps_n
+        self.mu = np.ascontiguousarray(self.mu_table[ma, mb])
+        self.hyst_p = np.full(self.pairs.shape[0], self.hyst)
+        self._no_damping = np.zeros(self.pairs.shape[0])
+        la = self.facet_length[self.pairs[:, 0]]
+        lb = self.facet_length[self.pairs[:, 1]]
+        self.depth = self.settings.depth_factor * np.minimum(la, lb)
+        self.travel = 0.0
+        self.since = 0
+        self.rebuilds += 1
+
+    def update_neighbours(self, v: np.ndarray, dt: float) -> None:
+        """Rebuild when due, or when the relative travel could exceed the margin.
+
+        Args:
+            v: nodal velocities [m/s] of the coming step (flat, local dofs).
+            dt: the coming step [s].
+        """
+        step_travel = 2.0 * K.max_speed(v) * dt
+        step_travel = self.comm.allreduce(step_travel, op=MPI.MAX)
+        if (self.since >= self.settings.rebuild_every
+                or self.travel + step_travel > self.margin):
+            self.rebuild(v)
+        self.travel += step_travel
+        self.since += 1
+
+    # ------------------------------------------------------------------ forces
+    def add_forces(self, f: np.ndarray, v: np.ndarray, dt: float, damping: bool = True) -> None:
+        """Add the contact forces [N] at the current displacement to ``f`` (collective).
+
+        Args:
+            f: (2 n_nodes,) local force array, added to.
+            v: local velocities [m/s] (for damping and the tangential slip increment v·dt).
+            dt: time step [s].
+            damping: apply the restitution (hysteretic unloading; off in dynamic relaxation).
+        """
+        self._sync(v)
+        self.f.fill(0.0)
+        K.facet_facet_forces(
+            self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
+            self.eps_n, self.eps_t, self.mu, self.hyst_p if damping else self._no_damping,
+            self.depth, self.model.width, dt, self.tau, self.pmax, self.f, self.energy,
+            self._work,
+        )
+        nloc = 2 * self.n_local_nodes
+        f[:nloc] += self.f[:nloc]
+        if self.exchange is not None and self.comm.size > 1:
+            self.exchange.reverse(self.f[nloc:].reshape(-1, 2), f[:nloc].reshape(-1, 2))
+        self.dissipated += self.energy[2]
+
+    def energies(self) -> dict[str, float]:
+        """Stored normal/tangential penalty energy and frictional dissipation [J]."""
+        c = self.comm
+        return {
+            "contact_normal": c.allreduce(float(self.energy[0])),
+            "contact_tangential": c.allreduce(float(self.energy[1])),
+            "friction_dissipated": c.allreduce(float(self.dissipated)),
+        }
+
+    def active_pairs(self) -> np.ndarray:
+        """(k, 2) global facet ids of the pairs in contact now, on every rank (diagnostic,
+        collective)."""
+        self._sync(self.model.v)
+        active = np.zeros(self.pairs.shape[0], dtype=bool)
+        for k, (a, b) in enumerate(self.pairs):
+            for fs, fm in ((b, a), (a, b)):
+                K._pass_zone(self.X, self.u, self.facets, self.fprev, self.fnext, fs, fm,
+                             self.depth[k], 0.0, self._work)
+                active[k] |= self._work[K.Z_ACTIVE] > 0
+        mine = self.ext_gid[self.pairs[active]].reshape(-1, 2)
+        allp = np.concatenate(self.comm.allgather(mine))
+        return allp[np.lexsort((allp[:, 1], allp[:, 0]))] if allp.size else allp
