@@ -491,8 +491,13 @@ class Model:
 
         ``extra_omega2`` [1/s²] bounds what other springs (contact penalties) add: the
         largest eigenvalue of a sum is at most the sum of the largest eigenvalues.
+        Elements whose nodes are all fully prescribed (a fixed base, a platen) do not
+        limit the step: their motion is given, not integrated.
         """
         omega2, _ = self.element_bounds()
+        mask, _ = self.prescribed_arrays(0.0)
+        node_fixed = (mask[0::2] == 1) & (mask[1::2] == 1)
+        omega2[np.all(node_fixed[self.cell_nodes], axis=1)] = 0.0
         w2 = self.comm.allreduce(float(omega2.max()) if omega2.size else 0.0, op=MPI.MAX)
         return 2.0 / np.sqrt(w2 + extra_omega2)
 

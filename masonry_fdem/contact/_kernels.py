@@ -164,6 +164,20 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, h
     for k in range(pairs.shape[0]):
         fa = pairs[k, 0]
         fb = pairs[k, 1]
+        # cheap rejection: facets whose boxes are further apart than the largest
+        # penetration considered cannot be in contact
+        ax1, ay1 = _pos(X, u, facets[fa, 0])
+        ax2, ay2 = _pos(X, u, facets[fa, 1])
+        bx1, by1 = _pos(X, u, facets[fb, 0])
+        bx2, by2 = _pos(X, u, facets[fb, 1])
+        dk = depth[k]
+        if (min(ax1, ax2) > max(bx1, bx2) + dk or min(bx1, bx2) > max(ax1, ax2) + dk
+                or min(ay1, ay2) > max(by1, by2) + dk or min(by1, by2) > max(ay1, ay2) + dk):
+            tau[k, 0] = 0.0
+            tau[k, 1] = 0.0
+            pmax[k, 0] = 0.0
+            pmax[k, 1] = 0.0
+            continue
         for p in range(2):
             fs = fb if p == 0 else fa
             fm = fa if p == 0 else fb

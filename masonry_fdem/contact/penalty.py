@@ -235,29 +235,38 @@ class BlockContact:
 
     # ------------------------------------------------------------------ time step
     def stable_omega2(self) -> float:
-        """Bound of ω² [1/s²] the contact springs add (collective)."""
+        """Bound of ω² [1/s²] the contact springs add (collective).
+
+        A boundary node's contact springs are at most ε_n w L_adj (L_adj: the length of
+        its two facets, ε_n the stiffest penalty its material has with any material),
+        coupling its mass to the lightest boundary node of the model.
+        """
         m = self.model
-        nodes, ladj = self._local_adjacent_length()
-        eps = float(self.eps_table.max())
-        mn = m.mass[2 * nodes] if nodes.size else np.ones(1)
-        m_min = self.comm.allreduce(float(mn.min()), op=MPI.MIN)
-        w2 = eps * m.width * ladj[nodes] * (1.0 / mn + 1.0 / m_min) if nodes.size else [0.0]
+        nodes, k = self._local_spring_bound()
+        mask, _ = m.prescribed_arrays(0.0)
+        free = (mask[2 * nodes] == 0) | (mask[2 * nodes + 1] == 0)
+        nodes = nodes[free]  # a node whose motion is prescribed is not integrated
+        mn = m.mass[2 * nodes]
+        m_min = self.comm.allreduce(float(mn.min()) if mn.size else np.inf, op=MPI.MIN)
+        w2 = k[nodes] * (1.0 / mn + 1.0 / m_min) if nodes.size else np.zeros(1)
         return self.comm.allreduce(float(np.max(w2)), op=MPI.MAX)
 
-    def _local_adjacent_length(self):
+    def _local_spring_bound(self):
+        """Boundary nodes of this rank and ε_n w L_adj [N/m] per local node."""
         m = self.model
         fl = self._input_to_local[self.g_facets[self.local_gid]]
-        ladj = np.zeros(m.n_nodes)
-        np.add.at(ladj, fl[:, 0], self.g_length[self.local_gid])
-        np.add.at(ladj, fl[:, 1], self.g_length[self.local_gid])
-        return np.unique(fl), ladj
+        eps = self.eps_table.max(axis=1)[self.g_material[self.local_gid]]
+        k = np.zeros(m.n_nodes)
+        w = eps * m.width * self.g_length[self.local_gid]
+        np.add.at(k, fl[:, 0], w)
+        np.add.at(k, fl[:, 1], w)
+        return np.unique(fl), k
 
     def stiffness_rowsum(self) -> np.ndarray:
         """(2 n_nodes,) bound of Σ_j |K_ij| [N/m] of the contact springs (for the fictitious
-        masses of dynamic relaxation): 2 ε_n w (length of the node's facets)."""
-        _, ladj = self._local_adjacent_length()
-        k = 2.0 * float(self.eps_table.max()) * self.model.width * ladj
-        return np.repeat(k, 2)
+        masses of dynamic relaxation): twice the node's spring bound."""
+        _, k = self._local_spring_bound()
+        return np.repeat(2.0 * k, 2)
 
     # ------------------------------------------------------------------ neighbours
     def rebuild(self, v: np.ndarray | None = None) -> None:
