@@ -90,3 +90,12 @@ def test_inflate_and_errors():
         build_adt(np.array([[np.nan, 0.0, 0.0, 1.0]]))
     with pytest.raises(ValueError, match=r"shape \(n, 2\*dim\)"):
         build_adt(np.zeros((3, 3)))
+
+
+def test_degenerate_identical_boxes():
+    """500 identical boxes (a deep, one-sided tree): every pair is found once."""
+    boxes = np.tile([[0.0, 0.0, 1.0, 1.0]], (500, 1))
+    pairs = self_pairs(boxes)
+    assert pairs.shape == (500 * 499 // 2, 2)
+    assert np.all(pairs[:, 0] < pairs[:, 1])
+    assert len({tuple(p) for p in pairs}) == pairs.shape[0]

@@ -26,15 +26,18 @@ class ADTree(NamedTuple):
     """A built tree: flat arrays that the numba search walks.
 
     Attributes:
-        points: (n, 2d) the boxes as points [m] (min_0.., max_0..).
-        order: (n,) item held by each tree node.
+        points: (n, 2d) the boxes as points [m] (min_0.., max_0..), by item.
+        node_box: (n, 2d) the box of the item held by each tree node.
+        order: (n,) item held by each tree node (nodes numbered in depth-first order).
         left, right: (n,) children of each tree node (-1: none).
         lo, hi: (2d,) the root region.
         depth: number of levels.
         sub: (n, 2d) bounding box of the boxes in each node's subtree [m].
+        size: (n,) number of nodes in each node's subtree.
     """
 
     points: np.ndarray
+    node_box: np.ndarray
     order: np.ndarray
     left: np.ndarray
     right: np.ndarray
@@ -42,6 +45,7 @@ class ADTree(NamedTuple):
     hi: np.ndarray
     depth: int
     sub: np.ndarray
+    size: np.ndarray
 
 
 def _check_boxes(boxes: np.ndarray, name: str = "boxes") -> np.ndarray:
@@ -67,12 +71,15 @@ def build_adt(boxes: np.ndarray, seed: int = 12345) -> ADTree:
     else:
         lo = np.zeros(m)
         hi = np.zeros(m)
-    left = np.empty(n, dtype=np.int64)
-    right = np.empty(n, dtype=np.int64)
-    depth = K.adt_build(points, order, lo, hi, left, right)
+    p_order = np.empty(n, dtype=np.int64)
+    p_left = np.empty(n, dtype=np.int64)
+    p_right = np.empty(n, dtype=np.int64)
+    depth = K.adt_build(points, order, lo, hi, p_order, p_left, p_right)
+    node_box = np.ascontiguousarray(points[p_order])
     sub = np.empty((n, m))
-    K.adt_subtree_bounds(points, order, left, right, sub)
-    return ADTree(points, order, left, right, lo, hi, int(depth), sub)
+    size = np.empty(n, dtype=np.int64)
+    K.adt_subtree_bounds(node_box, p_left, p_right, sub, size)
+    return ADTree(points, node_box, p_order, p_left, p_right, lo, hi, int(depth), sub, size)
 
 
 def _search(tree: ADTree, queries, qgroup, igroup, self_mode: bool):
@@ -80,8 +87,9 @@ def _search(tree: ADTree, queries, qgroup, igroup, self_mode: bool):
     while True:
         out_q = np.empty(cap, dtype=np.int64)
         out_i = np.empty(cap, dtype=np.int64)
-        n = K.adt_search(tree.points, tree.order, tree.left, tree.right, tree.sub,
-                         tree.depth, queries, qgroup, igroup, self_mode, out_q, out_i)
+        n = K.adt_search(tree.node_box, tree.order, tree.left, tree.right, tree.sub,
+                         tree.size, tree.depth, queries, qgroup, igroup, self_mode, out_q,
+                         out_i)
         if n <= cap:
             return out_q[:n], out_i[:n]
         cap = n
@@ -110,8 +118,8 @@ def self_pairs(boxes: np.ndarray, group: np.ndarray | None = None) -> np.ndarray
     if g.shape != (n,):
         raise ValueError(f"group must have shape ({n},)")
     i, j = _search(tree, tree.points, g, g, True)
-    out = np.stack([i, j], axis=1)
-    return out[np.lexsort((j, i))]
+    out = np.stack([np.minimum(i, j), np.maximum(i, j)], axis=1)
+    return out[np.lexsort((out[:, 1], out[:, 0]))]
 
 
 def inflate(boxes: np.ndarray, margin: float) -> np.ndarray:
