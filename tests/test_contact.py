@@ -303,3 +303,20 @@ def test_contact_same_on_any_rank_count():
     assert np.array_equal(pw, ps)
     assert np.abs(uw - us).max() <= 1e-10 * np.abs(us).max()
     assert ew.contact == pytest.approx(es.contact, rel=1e-9)
+
+
+def test_penetration_depth_limited_by_block_thickness():
+    """Points deeper than half a block's thickness (2 area / perimeter) are not counted:
+    they are nearer the block's other face (a tumbling brick's corner was once taken for
+    8 cm inside a 6.5 cm brick, and the contact exploded)."""
+    brick = rectangle(0.0, 0.0, 0.215, 0.065)
+    blocks = mesh_blocks([rectangle(-1, -0.2, 1, 0), brick + [0.0, 0.001]], materials="b",
+                         names=["floor", "brick"], comm=comm)
+    model = Model(blocks, {"b": STIFF}, comm=comm)
+    model.fix_blocks("floor")
+    contact = BlockContact(model, ContactSettings())
+    contact.rebuild()
+    thickness = 2 * 0.215 * 0.065 / (2 * (0.215 + 0.065))
+    assert contact.pairs.shape[0] > 0
+    assert np.all(contact.depth <= 0.5 * thickness + 1e-12)
+    assert np.isclose(contact.depth.max(), 0.5 * thickness)

@@ -77,6 +77,19 @@ def test_settle_arch_demo_small(shared_tmp, monkeypatch, capsys):
         assert (out / "settled.png").exists() and (out / "history.csv").exists()
 
 
+def test_topple_wall_demo_small(shared_tmp, monkeypatch, capsys):
+    out = shared_tmp / "topple"
+    monkeypatch.setattr(sys, "argv", ["topple_wall.py", "--courses", "3", "--bricks", "2",
+                                      "--time", "0.03", "--out", str(out)])
+    runpy.run_path(str(ROOT / "demos" / "topple_wall.py"), run_name="__main__")
+    text = capsys.readouterr().out
+    if comm.rank == 0:
+        line = [x for x in text.splitlines() if x.startswith("energy [J]")][0]
+        balance = float(line.split("balance")[1])
+        assert abs(balance) < 1e-6
+        assert (out / "toppled.png").exists() and (out / "history.csv").exists()
+
+
 def test_cli_info_and_settle(shared_tmp, capsys):
     from masonry_fdem.cli import main
 

@@ -28,6 +28,9 @@ import math
 from numba import njit
 
 GAUSS = 0.5 / math.sqrt(3.0)
+# a pass acts fully when the facets are within 60° of facing each other (−cos ≥ 0.5)
+# and fades linearly to nothing as they become perpendicular
+FACING = 0.5
 
 # results of one pass, in a small work array
 Z_S0 = 0
@@ -211,7 +214,12 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, h
             ty = (p2y - p1y) / lm
             nx = ty
             ny = -tx
-            half = 0.5  # each pass carries half of the pair's traction
+            # each pass carries half of the pair's traction, faded out smoothly as the two
+            # facets turn from facing each other (within FACING of anti-parallel) to
+            # perpendicular, so a pass never switches on or off with a jump in force
+            ls = math.hypot(q2x - q1x, q2y - q1y)
+            cosf = ((q2x - q1x) * tx + (q2y - q1y) * ty) / ls  # < 0 when facing
+            half = 0.5 * min(1.0, -cosf / FACING)
             # --- normal: exact integration of eps_n (−g − shift) N_i over the zone
             fs1 = 0.0  # slave node 1, 2 normal force magnitudes (along +n_m)
             fs2 = 0.0

@@ -143,8 +143,9 @@ class DynamicRelaxation:
                 )
             if it > 1 and den > 0 and num > 0:
                 c = min(2.0 * math.sqrt(num / den), 1.9 / self.dt)
-            else:
-                c = 0.0
+            # else keep the last estimate: a non-positive quotient (contact opening,
+            # friction slip) says nothing of the lowest frequency, and c = 0 would leave
+            # the iteration undamped
             K.dr_update(u, self.v, f_net, self.f_ext, self.mfict, self.presc, c, self.dt,
                         it == 1)
         res = DRResult(float(load_factor), converged, it, r_norm, ref)
