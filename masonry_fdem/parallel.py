@@ -186,15 +186,28 @@ class NodeExchange:
         self.send_counts = np.array([len(s) for s in send], dtype=np.int64)
         self.recv_counts = np.asarray(n_recv, dtype=np.int64)
         self.n_ghost = int(self.recv_counts.sum())
+        self._buffers: dict[tuple[str, int], np.ndarray] = {}  # reused every step
+        self._displs: dict = {}
+
+    def _buffer(self, kind: str, rows: int, w: int) -> np.ndarray:
+        buf = self._buffers.get((kind, w))
+        if buf is None:
+            buf = self._buffers[(kind, w)] = np.zeros((rows, w))
+        return buf
 
     def _displ(self, counts, width):
-        c = counts * width
-        return c, np.concatenate([[0], np.cumsum(c)[:-1]])
+        key = (id(counts), width)
+        hit = self._displs.get(key)
+        if hit is None:
+            c = counts * width
+            hit = self._displs[key] = (c, np.concatenate([[0], np.cumsum(c)[:-1]]))
+        return hit
 
     def forward(self, values: np.ndarray, out: np.ndarray) -> None:
         """values: (n_local, w) owned values → out: (n_ghost, w) ghost copies."""
         w = values.shape[1]
-        sbuf = np.ascontiguousarray(values[self.send_nodes])
+        sbuf = self._buffer("send", self.send_nodes.size, w)
+        np.take(values, self.send_nodes, axis=0, out=sbuf)
         sc, sd = self._displ(self.send_counts, w)
         rc, rd = self._displ(self.recv_counts, w)
         self.comm.Alltoallv([sbuf, (sc, sd), MPI.DOUBLE], [out, (rc, rd), MPI.DOUBLE])
@@ -203,7 +216,7 @@ class NodeExchange:
         """ghost_values: (n_ghost, w) contributions → added to out: (n_local, w) owners."""
         w = ghost_values.shape[1]
         sbuf = np.ascontiguousarray(ghost_values)
-        rbuf = np.zeros((self.send_nodes.size, w))
+        rbuf = self._buffer("recv", self.send_nodes.size, w)
         sc, sd = self._displ(self.recv_counts, w)
         rc, rd = self._displ(self.send_counts, w)
         self.comm.Alltoallv([sbuf, (sc, sd), MPI.DOUBLE], [rbuf, (rc, rd), MPI.DOUBLE])

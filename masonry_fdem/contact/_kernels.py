@@ -71,6 +71,17 @@ def _gap_line(qx, qy, ax, ay, bx, by):
 
 
 @njit(cache=True)
+def _neighbour_rule(q1x, q1y, q2x, q2y, ax, ay, bx, by, g1, g2, lim):
+    """Clip the zone to slave points behind the neighbouring facet a→b and no nearer to
+    the master facet's line than to its line (g ≥ h); False if the zone empties."""
+    h1 = _gap_line(q1x, q1y, ax, ay, bx, by)
+    h2 = _gap_line(q2x, q2y, ax, ay, bx, by)
+    if not _clip(-h1, -(h2 - h1), lim):
+        return False
+    return _clip(g1 - h1, (g2 - h2) - (g1 - h1), lim)
+
+
+@njit(cache=True)
 def _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, shift, out):
     """Contact zone of slave segment q1→q2 on master facet p1→p2 (see module doc).
 
@@ -109,21 +120,12 @@ def _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, shi
         return
     if not _clip(depth + g1, g2 - g1, lim):
         return
-    # convex vertex at p1 (turn p0→p1→p2 to the left): neighbour p0→p1
+    # at a convex vertex (a left turn), the neighbouring facet's rule applies too
     if (p1x - p0x) * (p2y - p1y) - (p1y - p0y) * (p2x - p1x) > 0.0:
-        h1 = _gap_line(q1x, q1y, p0x, p0y, p1x, p1y)
-        h2 = _gap_line(q2x, q2y, p0x, p0y, p1x, p1y)
-        if not _clip(-h1, -(h2 - h1), lim):
+        if not _neighbour_rule(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, g1, g2, lim):
             return
-        if not _clip(g1 - h1, (g2 - h2) - (g1 - h1), lim):
-            return
-    # convex vertex at p2: neighbour p2→p3
     if (p2x - p1x) * (p3y - p2y) - (p2y - p1y) * (p3x - p2x) > 0.0:
-        h1 = _gap_line(q1x, q1y, p2x, p2y, p3x, p3y)
-        h2 = _gap_line(q2x, q2y, p2x, p2y, p3x, p3y)
-        if not _clip(-h1, -(h2 - h1), lim):
-            return
-        if not _clip(g1 - h1, (g2 - h2) - (g1 - h1), lim):
+        if not _neighbour_rule(q1x, q1y, q2x, q2y, p2x, p2y, p3x, p3y, g1, g2, lim):
             return
     out[Z_LEN] = (lim[Z_S1] - lim[Z_S0]) * ls
     out[Z_PEN] = -min(g1 + lim[Z_S0] * (g2 - g1), g1 + lim[Z_S1] * (g2 - g1))
