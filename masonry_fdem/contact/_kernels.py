@@ -31,6 +31,8 @@ GAUSS = 0.5 / math.sqrt(3.0)
 # a pass acts fully when the facets are within 60° of facing each other (−cos ≥ 0.5)
 # and fades linearly to nothing as they become perpendicular
 FACING = 0.5
+# sine of the smallest turn at a boundary vertex that makes it a corner (0.06°)
+CONVEX = 1e-3
 
 # results of one pass, in a small work array
 Z_S0 = 0
@@ -120,11 +122,16 @@ def _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, shi
         return
     if not _clip(depth + g1, g2 - g1, lim):
         return
-    # at a convex vertex (a left turn), the neighbouring facet's rule applies too
-    if (p1x - p0x) * (p2y - p1y) - (p1y - p0y) * (p2x - p1x) > 0.0:
+    # at a convex vertex (a left turn), the neighbouring facet's rule applies too; a
+    # straight vertex (turn below CONVEX) is not a corner: there the two lines coincide
+    # and "nearer to which facet" would be decided by round-off, switching the zone on
+    # and off (seen: dynamic relaxation of an arch cycling for ever at a springing)
+    l0 = math.hypot(p1x - p0x, p1y - p0y)
+    if ((p1x - p0x) * (p2y - p1y) - (p1y - p0y) * (p2x - p1x)) > CONVEX * l0 * lm:
         if not _neighbour_rule(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, g1, g2, lim):
             return
-    if (p2x - p1x) * (p3y - p2y) - (p2y - p1y) * (p3x - p2x) > 0.0:
+    l3 = math.hypot(p3x - p2x, p3y - p2y)
+    if ((p2x - p1x) * (p3y - p2y) - (p2y - p1y) * (p3x - p2x)) > CONVEX * lm * l3:
         if not _neighbour_rule(q1x, q1y, q2x, q2y, p2x, p2y, p3x, p3y, g1, g2, lim):
             return
     out[Z_LEN] = (lim[Z_S1] - lim[Z_S0]) * ls
