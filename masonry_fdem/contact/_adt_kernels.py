@@ -1,22 +1,34 @@
 """Numba kernels of the alternating digital tree (ADT), after Bonet & Peraire (1991).
 
-Location mapping: a box in d dimensions, (min_0..min_{d-1}, max_0..max_{d-1}), is a
-point in 2d-space. Space bisection: the tree splits the root hyper-rectangle of that
-space at the midpoint of coordinate ``level mod 2d``, one coordinate per level; every
-tree node holds one item and an item is inserted by walking down, into the half that
-contains its point, until a free child slot. Box-intersection search: box B meets the
-query Q (closed) iff B.min_j <= Q.max_j and B.max_j >= Q.min_j for every j, i.e. B's
-point lies in [-inf, Q.max] x [Q.min, +inf]; subtrees whose region misses that set are
-pruned and every visited item is tested exactly.
+Location mapping: a box in d dimensions, (min_0..min_{d-1}, max_0..max_{d-1}), is a point
+in 2d-space. Space bisection: the tree node at depth ``level`` splits its region of that
+space at the midpoint of coordinate ``level mod 2d``; each node holds one item, its left
+subtree the items of the lower half, its right subtree those of the upper half.
+Box-intersection search: box B meets the query Q (closed) iff B.min_j <= Q.max_j and
+B.max_j >= Q.min_j for every j, i.e. B's point lies in [-inf, Q.max] x [Q.min, +inf];
+subtrees that cannot hold such a point are pruned, every visited item is tested exactly.
 
-Arrays: ``points`` (n, 2d) float64 [m]; ``order`` (n,) item of tree node t; ``left``,
-``right`` (n,) child tree nodes (-1: none); ``lo``, ``hi`` (2d,) root region. A node's
-region is rebuilt on the way down; for the search each node also keeps the bounding
-box of the boxes stored in its subtree (``sub``), the pruning test.
+Variant (documented in :mod:`masonry_fdem.contact.adt`): besides its bisection region,
+which is only rebuilt while building, every node keeps the bounding box of the boxes stored
+in its subtree (``sub``). Pruning with it is never weaker than pruning with the 2d-space
+region (the subtree's minima are >= the region's lower bounds, its maxima <= the region's
+upper bounds) and is much stronger for small boxes, whose max coordinates follow their min
+coordinates closely.
+
+Layout: nodes are numbered in depth-first preorder; node k's subtree is the node range
+k .. k + size[k] - 1, its left child (if any) is k + 1. Array names and shapes:
+``node_box`` (n, 2d) float64 [m], box of the item held by node k; ``item`` (n,) int64,
+that item's index in the caller's box array; ``left``, ``right`` (n,) int64 child nodes
+(-1: none); ``sub`` (n, 2d) float64 [m] subtree bounding boxes; ``size`` (n,) int64.
+
+Only numpy and numba are imported; outputs are allocated by the callers in ``adt.py``.
 """
 
 import numpy as np
 from numba import njit
+
+_STACK0 = 64  # initial capacity of the build stack (one entry per level of the path)
+_SMALL = 24  # segments up to this length are sorted by insertion sort
 
 
 @njit(cache=True)
@@ -27,104 +39,150 @@ def _grow_int(a, cap):
 
 
 @njit(cache=True)
-def _grow_float(a, cap):
+def _grow_rows(a, cap):
     b = np.empty((cap, a.shape[1]))
     b[: a.shape[0]] = a
     return b
 
 
 @njit(cache=True)
-def adt_build(points, perm, lo, hi, order, left, right):
-    """Build the tree that inserting the items one by one in the order ``perm`` gives.
+def root_region(points, lo, hi):
+    """lo, hi (2d,) [m]: the bounding hyper-rectangle of the points (n, 2d), n >= 1."""
+    lo[:] = points[0]
+    hi[:] = points[0]
+    for k in range(1, points.shape[0]):
+        for j in range(points.shape[1]):
+            lo[j] = min(lo[j], points[k, j])
+            hi[j] = max(hi[j], points[k, j])
 
-    Sequential insertion puts, at every node, the earliest-inserted item of the node's
-    region, and sends the later ones to the half of the region holding their point. The
-    same tree is built top-down here: a segment of items (kept in insertion order by
-    stable partitioning) becomes a node holding its first item, and the rest is split at
-    the region's midpoint along coordinate ``level mod 2d``. Memory is then walked
-    sequentially, and the nodes come out numbered in depth-first preorder: node k holds
-    item order[k], its left subtree follows it, then its right subtree.
+
+@njit(cache=True)
+def adt_build(points, perm, lo, hi, node_box, item, left, right, scratch_box, scratch_item):
+    """Build the ADT of the boxes ``points`` into preallocated arrays.
+
+    Inserting the items one by one in the order ``perm`` puts, at every node, the first
+    item (in that order) of the node's region, and sends the later ones to the half of
+    the region holding their point. The same tree is built here top down: a segment of
+    items, kept in insertion order, becomes a node holding its first item, and the rest
+    is split stably at the midpoint of the region along coordinate ``level mod 2d``.
+    The split copies rows with their item numbers between ``node_box`` and the scratch
+    arrays (so memory is walked sequentially, without data-dependent branches), and a
+    node's row is final in ``node_box`` once the node is made.
+
+    Args:
+        points: (n, 2d) float64 boxes [m], (min_0.., max_0..).
+        perm: (n,) int64 insertion order.
+        lo, hi: (2d,) float64 root region of 2d-space [m].
+        node_box: (n, 2d) float64 output, box of each node's item [m].
+        item: (n,) int64 output, item of each node.
+        left, right: (n,) int64 output, children (-1: none).
+        scratch_box: (n, 2d) float64 scratch; scratch_item: (n,) int64 scratch.
 
     Returns:
-        The depth (number of levels).
+        The depth (number of levels; 0 for an empty tree).
     """
     n = perm.size
     m = points.shape[1]
     if n == 0:
         return 0
     for k in range(n):
-        order[k] = perm[k]
+        item[k] = perm[k]
         left[k] = -1
         right[k] = -1
-    tmp = np.empty(n, dtype=np.int64)
-    rlo = np.empty(m)
-    rhi = np.empty(m)
-    # stack of pending segments (start, end, level, region): at most one right sibling
-    # per level of the current path; grown if a degenerate set makes the tree deep
-    cap = 64
+        for j in range(m):
+            node_box[k, j] = points[perm[k], j]
+    # pending segments (start, end, level, buffer, region); depth-first, so the stack holds
+    # at most one right sibling per level of the current path (grown for degenerate input)
+    cap = _STACK0
     st_s = np.empty(cap, dtype=np.int64)
     st_e = np.empty(cap, dtype=np.int64)
     st_l = np.empty(cap, dtype=np.int64)
     st_lo = np.empty((cap, m))
     st_hi = np.empty((cap, m))
+    rlo = np.empty(m)
+    rhi = np.empty(m)
     top = 0
     st_s[0] = 0
     st_e[0] = n
-    st_l[0] = 0
-    for j in range(m):
-        st_lo[0, j] = lo[j]
-        st_hi[0, j] = hi[j]
+    st_l[0] = 0  # level * 2 + buffer (0: node_box, 1: scratch)
+    for jj in range(m):
+        st_lo[0, jj] = lo[jj]
+        st_hi[0, jj] = hi[jj]
     depth = 0
     while top >= 0:
         s0 = st_s[top]
         e0 = st_e[top]
-        level = st_l[top]
+        level = st_l[top] >> 1
+        in_scratch = st_l[top] & 1
         for jj in range(m):
             rlo[jj] = st_lo[top, jj]
             rhi[jj] = st_hi[top, jj]
         top -= 1
-        if level + 1 > depth:
-            depth = level + 1
+        depth = max(depth, level + 1)
+        if in_scratch:
+            src, src_i, dst, dst_i = scratch_box, scratch_item, node_box, item
+            for jj in range(m):
+                node_box[s0, jj] = scratch_box[s0, jj]
+            item[s0] = scratch_item[s0]
+        else:
+            src, src_i, dst, dst_i = node_box, item, scratch_box, scratch_item
         if e0 - s0 <= 1:
             continue
         j = level % m
         mid = 0.5 * (rlo[j] + rhi[j])
-        # stable partition of order[s0+1:e0] by points[., j] < mid
         nl = 0
         for t in range(s0 + 1, e0):
-            if points[order[t], j] < mid:
-                tmp[nl] = order[t]
-                nl += 1
-        nr = 0
+            nl += src[t, j] < mid
+        # stable split into dst: branch-free destination
+        pl = s0 + 1
+        pr = s0 + 1 + nl
         for t in range(s0 + 1, e0):
-            if not points[order[t], j] < mid:
-                tmp[nl + nr] = order[t]
-                nr += 1
-        for t in range(nl + nr):
-            order[s0 + 1 + t] = tmp[t]
+            is_left = np.int64(src[t, j] < mid)
+            q = pr + (pl - pr) * is_left
+            for jj in range(m):
+                dst[q, jj] = src[t, jj]
+            dst_i[q] = src_i[t]
+            pl += is_left
+            pr += 1 - is_left
         if top + 2 >= cap:
             cap *= 2
             st_s = _grow_int(st_s, cap)
             st_e = _grow_int(st_e, cap)
             st_l = _grow_int(st_l, cap)
-            st_lo = _grow_float(st_lo, cap)
-            st_hi = _grow_float(st_hi, cap)
-        if nr > 0:
-            right[s0] = s0 + 1 + nl
+            st_lo = _grow_rows(st_lo, cap)
+            st_hi = _grow_rows(st_hi, cap)
+        code = 2 * (level + 1) + (1 - in_scratch)
+        a = s0 + 1 + nl
+        if e0 - a == 1:  # a leaf: made here, not pushed
+            right[s0] = a
+            depth = max(depth, level + 2)
+            if not in_scratch:
+                for jj in range(m):
+                    node_box[a, jj] = scratch_box[a, jj]
+                item[a] = scratch_item[a]
+        elif a < e0:
+            right[s0] = a
             top += 1
-            st_s[top] = s0 + 1 + nl
+            st_s[top] = a
             st_e[top] = e0
-            st_l[top] = level + 1
+            st_l[top] = code
             for jj in range(m):
                 st_lo[top, jj] = rlo[jj]
                 st_hi[top, jj] = rhi[jj]
             st_lo[top, j] = mid
-        if nl > 0:
+        if nl == 1:
+            left[s0] = s0 + 1
+            depth = max(depth, level + 2)
+            if not in_scratch:
+                for jj in range(m):
+                    node_box[s0 + 1, jj] = scratch_box[s0 + 1, jj]
+                item[s0 + 1] = scratch_item[s0 + 1]
+        elif nl > 0:
             left[s0] = s0 + 1
             top += 1
             st_s[top] = s0 + 1
-            st_e[top] = s0 + 1 + nl
-            st_l[top] = level + 1
+            st_e[top] = a
+            st_l[top] = code
             for jj in range(m):
                 st_lo[top, jj] = rlo[jj]
                 st_hi[top, jj] = rhi[jj]
@@ -133,11 +191,12 @@ def adt_build(points, perm, lo, hi, order, left, right):
 
 
 @njit(cache=True)
-def adt_subtree_bounds(node_box, left, right, sub, size):
-    """sub[k] = (min of the box minima, max of the box maxima) over node k's subtree:
-    the spatial bounding box of every box stored below k (children come after parents
-    in preorder, so one backward sweep suffices). node_box[k] is node k's own box;
-    size[k] is the number of nodes of the subtree (nodes k .. k + size[k] - 1)."""
+def adt_subtree_bounds(node_box, left, right, sub, size, up):
+    """Fill ``sub`` (n, 2d) [m] with the bounding box of the boxes stored in each node's
+    subtree, ``size`` (n,) with its number of nodes, and ``up`` (n,) with the nearest node
+    of its path to the root (itself included) that is a left child with a right sibling
+    (-1: none); the parent of such a node x is x - 1, its sibling right[x - 1]. Children
+    follow their parent in preorder: one backward and one forward sweep."""
     n = node_box.shape[0]
     m = node_box.shape[1]
     d = m // 2
@@ -149,83 +208,56 @@ def adt_subtree_bounds(node_box, left, right, sub, size):
             if c >= 0:
                 size[k] += size[c]
                 for j in range(d):
-                    if sub[c, j] < sub[k, j]:
-                        sub[k, j] = sub[c, j]
-                    if sub[c, d + j] > sub[k, d + j]:
-                        sub[k, d + j] = sub[c, d + j]
+                    sub[k, j] = min(sub[k, j], sub[c, j])
+                    sub[k, d + j] = max(sub[k, d + j], sub[c, d + j])
+    if n > 0:
+        up[0] = -1
+    for k in range(n):
+        if left[k] >= 0:
+            up[left[k]] = left[k] if right[k] >= 0 else up[k]
+        if right[k] >= 0:
+            up[right[k]] = up[k]
 
 
 @njit(cache=True)
-def adt_search(node_box, order, left, right, sub, size, depth, queries, qgroup, igroup,
-               self_mode, out_q, out_i):
-    """All (query, item) pairs whose boxes meet.
+def _meets(a, ka, b, kb, d):
+    """Closed intersection of box row ka of a and box row kb of b, each (., 2d)."""
+    for j in range(d):
+        if a[ka, j] > b[kb, d + j] or b[kb, j] > a[ka, d + j]:
+            return False
+    return True
 
-    The walk follows the alternating digital tree; a subtree is skipped when the query
-    misses the bounding box of all boxes stored in it (``sub``), which prunes far better
-    than the bisection region of 2d-space alone.
+
+@njit(cache=True)
+def adt_query(node_box, item, left, right, sub, depth, queries, out_q, out_i):
+    """All (query, item) pairs of meeting boxes, grouped by query (ascending).
 
     Args:
-        node_box: (n, 2d) box of the item of each tree node.
-        sub: (n, 2d) subtree bounds from :func:`adt_subtree_bounds`.
-        depth: tree depth (bounds the stack).
-        queries: (nq, 2d) query boxes.
-        qgroup, igroup: group of each query / item; pairs within one group are skipped
-            when the group is >= 0 (same block).
-        size: (n,) subtree sizes (preorder ranges).
-        self_mode: the queries are the items themselves (``queries`` is ignored): node a
-            is paired only with nodes b > a in preorder, so each pair is found once and
-            subtrees lying wholly before a are skipped; output (item a, item b).
-        out_q, out_i: output buffers; pairs beyond their size are counted, not written.
+        queries: (nq, 2d) float64 query boxes [m].
+        out_q, out_i: (cap,) int64 output buffers; pairs past ``cap`` are counted only.
 
     Returns:
-        The number of pairs (may exceed the buffer size: then call again, larger).
+        The number of pairs (if larger than ``cap``, call again with larger buffers).
     """
-    n = order.size
+    n = item.size
     d = node_box.shape[1] // 2
     cap = out_q.size
     count = 0
     if n == 0:
         return 0
-    stack = np.empty(depth + 2, dtype=np.int64)
-    q = np.empty(2 * d)
-    nq = n if self_mode else queries.shape[0]
-    for a in range(nq):
-        if self_mode:
-            qi = order[a]
-            for j in range(2 * d):
-                q[j] = node_box[a, j]
-        else:
-            qi = a
-            for j in range(2 * d):
-                q[j] = queries[a, j]
+    stack = np.empty(depth + 1, dtype=np.int64)
+    for qi in range(queries.shape[0]):
         top = 0
         stack[0] = 0
         while top >= 0:
             k = stack[top]
             top -= 1
-            if self_mode and k + size[k] <= a:
+            if not _meets(sub, k, queries, qi, d):
                 continue
-            miss = False
-            for j in range(d):
-                if sub[k, j] > q[d + j] or sub[k, d + j] < q[j]:
-                    miss = True
-                    break
-            if miss:
-                continue
-            it = order[k]
-            hit = True
-            for j in range(d):
-                if node_box[k, j] > q[d + j] or node_box[k, d + j] < q[j]:
-                    hit = False
-                    break
-            if hit and self_mode and k <= a:
-                hit = False
-            if hit and qgroup[qi] >= 0 and qgroup[qi] == igroup[it]:
-                hit = False
-            if hit:
+            if _meets(node_box, k, queries, qi, d):
                 if count < cap:
                     out_q[count] = qi
-                    out_i[count] = it
+                    out_i[count] = item[k]
                 count += 1
             if right[k] >= 0:
                 top += 1
@@ -237,25 +269,162 @@ def adt_search(node_box, order, left, right, sub, size, depth, queries, qgroup, 
 
 
 @njit(cache=True)
-def brute_pairs(boxes, group, out_i, out_j):
-    """O(N²) reference: all i < j with meeting boxes and different groups (group < 0:
-    no exclusion). Returns the count (pairs past the buffers are counted, not written)."""
-    n = boxes.shape[0]
-    d = boxes.shape[1] // 2
+def adt_self(node_box, item, left, right, up, sub, depth, group, out_i, out_j):
+    """All unordered pairs of meeting tree items, each once, different groups only.
+
+    Node a (in preorder) is the query and is paired only with the nodes b > a: those of
+    its own subtree and those of the right subtrees hanging off its ancestors on the
+    left-to-right side of its path. They are found bottom up, jumping (``up``) from one
+    such ancestor to the next, so the ancestors themselves are never searched.
+
+    Args:
+        up: (n,) int64 from :func:`adt_subtree_bounds`.
+        group: (n,) int64 group of each item (by item index); pairs with equal groups
+            >= 0 are left out (same block), groups < 0 exclude nothing.
+        out_i, out_j: (cap,) int64 output buffers (item indices, unordered within a
+            pair); pairs past ``cap`` are counted only.
+
+    Returns:
+        The number of pairs (if larger than ``cap``, call again with larger buffers).
+    """
+    n = item.size
+    d = node_box.shape[1] // 2
     cap = out_i.size
     count = 0
+    if n == 0:
+        return 0
+    # at most one sibling per ancestor plus the depth-first stack below one of them
+    stack = np.empty(2 * depth + 2, dtype=np.int64)
+    for a in range(n):
+        ia = item[a]
+        ga = group[ia]
+        top = -1
+        x = up[a]
+        while x >= 0:
+            r = right[x - 1]
+            if _meets(sub, r, node_box, a, d):
+                top += 1
+                stack[top] = r
+            x = up[x - 1]
+        for c in (right[a], left[a]):
+            if c >= 0 and _meets(sub, c, node_box, a, d):
+                top += 1
+                stack[top] = c
+        while top >= 0:
+            k = stack[top]
+            top -= 1
+            if _meets(node_box, k, node_box, a, d):
+                ib = item[k]
+                if ga < 0 or group[ib] != ga:
+                    if count < cap:
+                        out_i[count] = ia
+                        out_j[count] = ib
+                    count += 1
+            for c in (right[k], left[k]):
+                if c >= 0 and _meets(sub, c, node_box, a, d):
+                    top += 1
+                    stack[top] = c
+    return count
+
+
+@njit(cache=True)
+def _sort_segment(v, s, e):
+    """Sort v[s:e] in place: insertion sort when short (the usual few neighbours)."""
+    if e - s > _SMALL:
+        v[s:e].sort()
+        return
+    for t in range(s + 1, e):
+        x = v[t]
+        u = t - 1
+        while u >= s and v[u] > x:
+            v[u + 1] = v[u]
+            u -= 1
+        v[u + 1] = x
+
+
+@njit(cache=True)
+def sort_within_groups(key, val):
+    """Sort ``val`` (m,) in place within each run of equal ``key`` (m,) (key is grouped,
+    e.g. query indices in the order the search wrote them)."""
+    m = key.size
+    s = 0
+    while s < m:
+        e = s + 1
+        while e < m and key[e] == key[s]:
+            e += 1
+        _sort_segment(val, s, e)
+        s = e
+
+
+@njit(cache=True)
+def sort_pairs(pi, pj, start, fill, out):
+    """Lexicographically sorted (min, max) pairs, by a counting sort on the smaller index
+    and a sort of each row's (few) partners: O(m + n).
+
+    Args:
+        pi, pj: (m,) int64 unordered pairs of indices < n.
+        start: (n + 1,) int64 output, row r of the result is out[start[r]:start[r+1]].
+        fill: (n,) int64 scratch.
+        out: (m, 2) int64 output.
+    """
+    m = pi.size
+    n = fill.size
+    start[:] = 0
+    for t in range(m):
+        start[min(pi[t], pj[t]) + 1] += 1
+    for r in range(n):
+        start[r + 1] += start[r]
+    col = out[:, 1]
+    fill[:] = start[:n]
+    for t in range(m):
+        r = min(pi[t], pj[t])
+        col[fill[r]] = max(pi[t], pj[t])
+        fill[r] += 1
+    for r in range(n):
+        out[start[r] : start[r + 1], 0] = r
+        _sort_segment(col, start[r], start[r + 1])
+
+
+@njit(cache=True)
+def _brute_pairs(cols, group, out_i, out_j):
+    """O(N²) reference: all i < j with meeting boxes and different groups (group < 0:
+    no exclusion), in lexicographic order.
+
+    Args:
+        cols: (2d, n) float64 boxes by column [m] (min_0.., max_0..).
+        group: (n,) int64.
+        out_i, out_j: (cap,) int64 buffers; pairs past ``cap`` are counted only.
+
+    Returns:
+        The number of pairs.
+    """
+    m, n = cols.shape
+    d = m // 2
+    cap = out_i.size
+    count = 0
+    blk = 64
+    e = 1 % d  # second axis (the first again if d = 1)
     for i in range(n):
-        for j in range(i + 1, n):
-            if group[i] >= 0 and group[i] == group[j]:
+        lo0 = cols[0, i]
+        hi0 = cols[d, i]
+        lo1 = cols[e, i]
+        hi1 = cols[d + e, i]
+        for j0 in range(i + 1, n, blk):
+            j1 = min(j0 + blk, n)
+            # branch-free count on two axes (vectorised) before the full test of the block
+            c = 0
+            for j in range(j0, j1):
+                c += ((cols[0, j] <= hi0) & (lo0 <= cols[d, j])
+                      & (cols[e, j] <= hi1) & (lo1 <= cols[d + e, j]))
+            if c == 0:
                 continue
-            hit = True
-            for a in range(d):
-                if boxes[i, a] > boxes[j, d + a] or boxes[j, a] > boxes[i, d + a]:
-                    hit = False
-                    break
-            if hit:
-                if count < cap:
-                    out_i[count] = i
-                    out_j[count] = j
-                count += 1
+            for j in range(j0, j1):
+                hit = True
+                for a in range(d):
+                    hit &= (cols[a, j] <= cols[d + a, i]) & (cols[a, i] <= cols[d + a, j])
+                if hit and not (group[i] >= 0 and group[i] == group[j]):
+                    if count < cap:
+                        out_i[count] = i
+                        out_j[count] = j
+                    count += 1
     return count
