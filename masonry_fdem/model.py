@@ -373,13 +373,26 @@ class Model:
             vel[c] = 0.0
         return self._prescribe(nodes.astype(np.int64), vel, name)
 
+    def prescribe_nodes(
+        self,
+        where: Callable[[np.ndarray], np.ndarray],
+        velocity: Sequence[float | None] | Callable[[float], Sequence[float]],
+        name: str,
+    ) -> Prescription:
+        """Prescribe the velocity [m/s] of the nodes where ``where(X)`` is True (X: (2, n)
+        [m]): a loading knife or a support point across the pieces of a fractured unit.
+        ``velocity`` is as in :meth:`prescribe_velocity`."""
+        nodes = np.flatnonzero(np.asarray(where(self.X.T), dtype=bool))
+        if self.comm.allreduce(nodes.size) == 0:
+            raise ValueError(f"prescription {name!r}: the locator selects no node")
+        return self._prescribe(nodes.astype(np.int64), velocity, name)
+
     def _prescribe(self, nodes, velocity, name) -> Prescription:
-        if not callable(velocity):
-            if len(velocity) != 2:
-                raise ValueError("a velocity has two components (vx, vy)")
-            comps = [c for c in range(2) if velocity[c] is not None]
-        else:
-            comps = [0, 1]
+        v0 = velocity(0.0) if callable(velocity) else velocity
+        if len(v0) != 2:
+            raise ValueError("a velocity has two components (vx, vy)")
+        # a None component is free (for a function of time: None at t = 0)
+        comps = [c for c in range(2) if v0[c] is not None]
         comps = np.asarray(comps, dtype=np.int64)
         dofs = (2 * nodes[:, None] + comps[None, :]).ravel()
         p = Prescription(name, dofs, np.tile(comps, nodes.size), velocity)

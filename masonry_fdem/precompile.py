@@ -46,6 +46,23 @@ def precompile() -> None:
     C.facet_boxes(X, uu, facets, 0.1, np.zeros((4, 4)))
     C.max_speed(uu)
 
+    from masonry_fdem.contact import _joint_kernels as J
+
+    props = np.zeros((1, J.N_PROPS))
+    props[0, [J.P_KN, J.P_KS, J.P_FT, J.P_GF1, J.P_C, J.P_GF2, J.P_FC, J.P_KP, J.P_GFC]] = 1.0
+    ip = np.array([[0, 1]], dtype=np.int64)
+    half = np.full(1, 0.5)
+    s0 = J.empty_state(1)
+    s1 = J.empty_state(1)
+    alive = np.ones(1, dtype=np.int8)
+    J.joint_forces(X, uu, ip, ip[:, ::-1].copy(), half, half, half, np.zeros(1, np.int64),
+                   props, alive, s0, s1, np.zeros(8), np.zeros(2))
+    J.commit(alive, s0, s1)
+    J.node_spring_bound(ip, ip, half, half, half, np.zeros(1, np.int64), props, alive,
+                        np.zeros(4))
+    J.interface_law(props[0], 2.0, 1.0, s0[0], s1[0])
+    J.interface_law(props[0], -2.0, 0.5, s0[0], s1[0])
+
     from masonry_fdem.contact.adt import brute_force_pairs, query_adt, self_pairs
 
     boxes = np.array([[0.0, 0.0, 1.0, 1.0], [0.5, 0.5, 2.0, 2.0], [3.0, 3.0, 4.0, 4.0]])

@@ -158,6 +158,8 @@ class BlockContact:
         self.tau = np.zeros((0, 2))
         self.pmax = np.zeros((0, 2))
         self.keys = np.zeros(0, dtype=np.int64)
+        # facet-pair keys (min·n + max of global facet ids) left out: bonded joints
+        self.excluded = np.zeros(0, dtype=np.int64)
         self.energy = np.zeros(3)
         self.dissipated = 0.0
         self.travel = math.inf
@@ -323,6 +325,9 @@ class BlockContact:
         pairs[swap] = pairs[swap][:, ::-1]
         n_g = self.g_facets.shape[0]
         keys = np.minimum(ga, gb) * n_g + np.maximum(ga, gb)
+        if self.excluded.size and keys.size:
+            free = ~np.isin(keys, self.excluded)
+            pairs, keys = pairs[free], keys[free]
         tau = np.zeros((pairs.shape[0], 2))
         pmax = np.zeros((pairs.shape[0], 2))
         if self.keys.size and keys.size:

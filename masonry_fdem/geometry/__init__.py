@@ -20,7 +20,7 @@ Lengths are in metres, areas in square metres.
 """
 
 from masonry_fdem.geometry.arches import ArchKind, arch_curve, arch_layout, build_arch
-from masonry_fdem.geometry.blockmesh import BlockMesh
+from masonry_fdem.geometry.blockmesh import BlockMesh, unit_name
 from masonry_fdem.geometry.layout import (
     BlockLayout,
     block_on_base_layout,
@@ -53,5 +53,6 @@ __all__ = [
     "rectangle",
     "stack_layout",
     "wall_layout",
+    "unit_name",
     "write_msh",
 ]

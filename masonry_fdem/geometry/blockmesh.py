@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["BlockMesh"]
+__all__ = ["BlockMesh", "unit_name"]
 
 # A triangle whose |2 * area| is below this times its longest edge squared is degenerate.
 _DEGENERATE_TOL = 1e-12
@@ -471,6 +471,51 @@ class BlockMesh:
             block_material=self.block_material[ids],
         )
 
+    def fractured(self, sel=None, *, material=None) -> BlockMesh:
+        """A copy in which the selected blocks (units) are cut into their triangles.
+
+        Each triangle of a selected block becomes a block of its own, named
+        ``"<unit>#<k>"`` (see :func:`unit_name`), with its own three nodes; the bonded
+        joints (:class:`~masonry_fdem.contact.Joints`) then tie the pieces back together
+        with the unit's cohesive crack law, so cracks can open along any element edge.
+
+        Args:
+            sel, material: which blocks, as in :meth:`select` (all blocks by default).
+        """
+        chosen = np.zeros(self.n_blocks, dtype=bool)
+        chosen[self.select(sel, material=material)] = True
+        xs, cells, cb, names, bmat = [], [], [], [], []
+        n = 0
+        for b in range(self.n_blocks):
+            c = self.cells[self.cell_offsets[b]:self.cell_offsets[b + 1]]
+            if chosen[b]:
+                for k, tri in enumerate(c):
+                    xs.append(self.x[tri])
+                    cells.append(np.arange(n, n + 3)[None, :])
+                    n += 3
+                    cb.append([len(names)])
+                    names.append(f"{self.block_names[b]}#{k}")
+                    bmat.append(self.block_material[b])
+            else:
+                nodes = np.arange(self.node_offsets[b], self.node_offsets[b + 1])
+                xs.append(self.x[nodes])
+                cells.append(c - self.node_offsets[b] + n)
+                n += nodes.size
+                cb.append(np.full(c.shape[0], len(names)))
+                names.append(self.block_names[b])
+                bmat.append(self.block_material[b])
+        return BlockMesh.from_arrays(
+            np.concatenate(xs), np.concatenate(cells), np.concatenate(cb),
+            block_names=names, material_names=self.material_names, block_material=bmat,
+        )
+
+    @cached_property
+    def block_unit(self) -> np.ndarray:
+        """``(n_blocks,)`` int64 unit id: pieces of one fractured unit share it."""
+        units = [unit_name(n) for n in self.block_names]
+        _, first, inv = np.unique(units, return_index=True, return_inverse=True)
+        return np.argsort(np.argsort(first))[inv].astype(np.int64)
+
     def core_arrays(self) -> dict:
         """The constructor fields, e.g. to send to other ranks and rebuild there."""
         return {
@@ -482,3 +527,8 @@ class BlockMesh:
             "material_names": self.material_names,
             "block_names": self.block_names,
         }
+
+
+def unit_name(block_name: str) -> str:
+    """The unit a block belongs to: its name up to ``#`` (pieces of a fractured unit)."""
+    return block_name.split("#", 1)[0]

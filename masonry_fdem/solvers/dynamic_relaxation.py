@@ -24,12 +24,13 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from masonry_fdem.solvers import _kernels as K
+from masonry_fdem.solvers._interactions import as_interactions
 
 __all__ = ["DynamicRelaxation", "DRResult"]
 
@@ -68,9 +69,12 @@ class DynamicRelaxation:
         ke_tol: fictitious kinetic energy tolerance relative to its peak in the increment.
         max_iter: iteration limit per load increment.
         mass_safety: α in the fictitious mass bound (≥ 1).
-        contact: a :class:`~masonry_fdem.contact.BlockContact`, or None. Its penalty
-            springs enter the fictitious masses; its forces (without restitution damping)
+        contact: a :class:`~masonry_fdem.contact.BlockContact`, the bonded
+            :class:`~masonry_fdem.contact.Joints`, a sequence of them, or None. Their
+            springs enter the fictitious masses; their forces (without restitution damping)
             enter the residual; friction slips by the fictitious displacement increments.
+            Joint states are trial states computed from the last converged increment and
+            committed only when an increment converges.
     """
 
     def __init__(
@@ -94,8 +98,9 @@ class DynamicRelaxation:
         self.dt = 1.0
         _, rowsum = model.element_bounds()
         self.contact = contact
-        if contact is not None:
-            rowsum = rowsum + contact.stiffness_rowsum()
+        self.interactions = as_interactions(contact)
+        for c in self.interactions:
+            rowsum = rowsum + c.stiffness_rowsum()
         self.mfict = mass_safety * 0.25 * self.dt**2 * rowsum
         if np.any(self.mfict <= 0):
             raise ValueError("a dof has no stiffness: is a node not attached to any element?")
@@ -107,10 +112,23 @@ class DynamicRelaxation:
         self._sums = np.zeros(4)
         self.results: list[DRResult] = []
 
-    def solve(self, load_factor: float = 1.0) -> DRResult:
-        """Bring the model to equilibrium under ``f_dead + load_factor · f_live``."""
+    def solve(
+        self,
+        load_factor: float = 1.0,
+        displacement: Mapping[str, Sequence[float | None]] | None = None,
+    ) -> DRResult:
+        """Bring the model to equilibrium under ``f_dead + load_factor · f_live``.
+
+        Args:
+            load_factor: factor on the live loads.
+            displacement: displacement control: ``{prescription name: (ux, uy)}`` [m]
+                sets the prescribed dofs of that prescription (a loading platen) to these
+                total displacements (``None``: leave that component as it is).
+        """
         m = self.model
         comm = m.comm
+        if displacement:
+            self.prescribe(displacement)
         m.external_force(load_factor, out=self.f_ext)
         free = self.presc == 0
         ref2 = comm.allreduce(float(np.dot(self.f_ext[free], self.f_ext[free])))
@@ -148,6 +166,10 @@ class DynamicRelaxation:
             # the iteration undamped
             K.dr_update(u, self.v, f_net, self.f_ext, self.mfict, self.presc, c, self.dt,
                         it == 1)
+        if converged:
+            for c in self.interactions:
+                if hasattr(c, "commit"):
+                    c.commit()
         res = DRResult(float(load_factor), converged, it, r_norm, ref)
         self.results.append(res)
         if comm.rank == 0:
@@ -158,15 +180,31 @@ class DynamicRelaxation:
             )
         return res
 
+    def prescribe(self, displacement: Mapping[str, Sequence[float | None]]) -> None:
+        """Set prescribed dofs to total displacements [m] (see :meth:`solve`)."""
+        by_name = {p.name: p for p in self.model.prescriptions}
+        u = self.model.u.x.array
+        for name, val in displacement.items():
+            if name not in by_name:
+                raise ValueError(f"no prescription named {name!r}; have {sorted(by_name)}")
+            if len(val) != 2:
+                raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
+            p = by_name[name]
+            for comp in (0, 1):
+                if val[comp] is not None:
+                    sel = p.components == comp
+                    u[p.dofs[sel]] = float(val[comp])
+
     def _resisting_force(self) -> np.ndarray:
         """f_int(u) − f_contact(u) [N]: what the applied loads must balance."""
         m = self.model
         m.internal_force(m.f_int)
-        if self.contact is None:
+        if not self.interactions:
             return m.f_int
-        self.contact.update_neighbours(self.v, self.dt)
         np.negative(m.f_int, out=self.f_net)
-        self.contact.add_forces(self.f_net, self.v, self.dt, damping=False)
+        for c in self.interactions:
+            c.update_neighbours(self.v, self.dt)
+            c.add_forces(self.f_net, self.v, self.dt, damping=False)
         np.negative(self.f_net, out=self.f_net)
         return self.f_net
 

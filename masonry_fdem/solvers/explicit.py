@@ -23,6 +23,7 @@ import numpy as np
 
 from masonry_fdem.constants import DT_SAFETY
 from masonry_fdem.solvers import _kernels as K
+from masonry_fdem.solvers._interactions import as_interactions
 
 __all__ = ["ExplicitSolver", "EnergyAccount", "UnstableTimeStepError"]
 
@@ -62,8 +63,9 @@ class ExplicitSolver:
         safety: fraction of the critical step used when ``dt`` is None.
         damping: mass-proportional damping coefficient α [1/s] (f_damp = α M v).
         load_factor: factor on the live loads (constant, or a function of time).
-        contact: a :class:`~masonry_fdem.contact.BlockContact`, or None (blocks do not
-            interact). Its penalty springs are included in the stable time step.
+        contact: a :class:`~masonry_fdem.contact.BlockContact`, the bonded
+            :class:`~masonry_fdem.contact.Joints`, a sequence of them, or None (blocks do not
+            interact). Their springs are included in the stable time step.
 
     Raises:
         UnstableTimeStepError: ``dt`` exceeds the critical time step.
@@ -81,8 +83,9 @@ class ExplicitSolver:
     ):
         self.model = model
         self.contact = contact
+        self.interactions = as_interactions(contact)
         self.dt_critical = model.stable_time_step(
-            extra_omega2=contact.stable_omega2() if contact is not None else 0.0
+            extra_omega2=sum(c.stable_omega2() for c in self.interactions)
         )
         if dt is None:
             if not 0 < safety <= 1:
@@ -128,10 +131,13 @@ class ExplicitSolver:
         if callable(self.load_factor):
             m.external_force(self._factor(self.t), out=self.f_ext)
         m.internal_force(self.model.f_int)
-        if self.contact is not None:
-            self.contact.update_neighbours(m.v, self.dt)
+        if self.interactions:
             self.f_con.fill(0.0)
-            self.contact.add_forces(self.f_con, m.v, self.dt)
+            for c in self.interactions:
+                c.update_neighbours(m.v, self.dt)
+                c.add_forces(self.f_con, m.v, self.dt)
+                if hasattr(c, "commit"):
+                    c.commit()
         K.central_difference_step(
             m.u.x.array, m.v, m.f_int, self.f_ext, self.f_con, m.mass, m.minv, self.presc,
             self.vp, self.damping, self.dt, self.reaction, self.energy,

@@ -1,0 +1,391 @@
+"""Numba kernels of the bonded joints: the composite interface law and its forces.
+
+The law is the composite interface model of Lourenço & Rots (1997, "Multisurface interface
+model for analysis of masonry structures", J. Eng. Mech. 123(7)), written here in relative
+displacements of a zero-thickness interface (SI: tractions in Pa, displacements in m,
+stiffnesses in Pa/m, fracture energies in J/m² = N/m):
+
+* elastic: σ = k_n (Δn − Δn_p), τ = k_s (Δs − Δs_p), σ > 0 in tension;
+* tension cut-off  f1 = σ − f_t R,             R: softening factor (below);
+* Coulomb friction f2 = |τ| + σ tan φ − c R,   flow g2 = |τ| + σ tan ψ (non-associated);
+* compression cap  f3 = σ² + C_s τ² − σ̄_c(κ3)²  (associated, σ < 0);
+* softening: R = min(exp(−f_t κ1 / G_fI), exp(−c κ2 / G_fII)), so tension and cohesion
+  degrade together (the paper's coupled, isotropic softening), each mode driven by its
+  own plastic displacement κ1 (opening) and κ2 (slip); with R → 0 the law is Coulomb
+  friction without tension, i.e. frictional contact;
+* dilatancy tan ψ = tan ψ0 · ⟨1 − σ/σ_u⟩ · exp(−δ κ2): it vanishes under the confining
+  stress σ_u < 0 and decays with slip;
+* cap hardening/softening (Lourenço's three branches): σ̄_c = f_c/3 → f_c at κ3 = κ_p
+  (elliptic), → f_c/2 at κ_m (parabolic), → f_c/7 exponentially. Here κ_m − κ_p =
+  G_fc / (0.818 f_c), so that the area between the post-peak curve and the residual
+  strength f_c/7 equals G_fc.
+
+The return mapping starts from the COMMITTED state and the current total relative
+displacement (backward Euler), and writes a TRIAL state: explicit runs commit every step,
+dynamic relaxation commits at a converged load step. Surfaces are returned one after the
+other (tension, shear, cap), repeated until all hold (corners).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# material properties (columns of the props table)
+P_KN, P_KS, P_FT, P_GF1, P_C, P_TANPHI, P_GF2, P_TANPSI, P_SIGU, P_DELTA = range(10)
+P_FC, P_CS, P_KP, P_GFC = 10, 11, 12, 13
+N_PROPS = 14
+
+# state per integration point (committed and trial)
+S_DNP, S_DSP, S_K1, S_K2, S_K3, S_STATUS, S_SN, S_TS, S_DISS, S_DN, S_DS = range(11)
+N_STATE = 11
+
+# status codes
+INTACT, SOFTENING, OPEN, SLIDING, CRUSHED = 0, 1, 2, 3, 4
+BROKEN_R = 1e-2  # softening factor below which a joint counts as broken
+
+# energies returned
+E_ELASTIC, E_DISSIPATED = 0, 1
+
+
+@njit(cache=True)
+def softening_factor(p, k1, k2):
+    """R = min(exp(−f_t κ1/G_fI), exp(−c κ2/G_fII)) (1 when a mode has no strength)."""
+    r = 1.0
+    if p[P_FT] > 0.0 and p[P_GF1] > 0.0:
+        r = min(r, math.exp(-p[P_FT] * k1 / p[P_GF1]))
+    if p[P_C] > 0.0 and p[P_GF2] > 0.0:
+        r = min(r, math.exp(-p[P_C] * k2 / p[P_GF2]))
+    return r
+
+
+@njit(cache=True)
+def cap_strength(p, k3):
+    """σ̄_c(κ3) [Pa]: hardening to f_c at κ_p, then softening to f_c/7."""
+    fc = p[P_FC]
+    kp = p[P_KP]
+    si = fc / 3.0
+    sm = 0.5 * fc
+    sr = fc / 7.0
+    if k3 <= kp:
+        x = k3 / kp
+        return si + (fc - si) * math.sqrt(max(2.0 * x - x * x, 0.0))
+    dm = p[P_GFC] / (0.818027210884 * fc)
+    if k3 <= kp + dm:
+        x = (k3 - kp) / dm
+        return fc + (sm - fc) * x * x
+    m = 2.0 * (sm - fc) / dm
+    return sr + (sm - sr) * math.exp(m * (k3 - kp - dm) / (sm - sr))
+
+
+@njit(cache=True)
+def _tension_residual(p, sn_tr, lam, k1, k2):
+    return sn_tr - p[P_KN] * lam - p[P_FT] * softening_factor(p, k1 + lam, k2)
+
+
+@njit(cache=True)
+def _shear_residual(p, at, sn, tpsi, lam, k1, k2):
+    r = softening_factor(p, k1, k2 + lam)
+    return at - p[P_KS] * lam + (sn - p[P_KN] * tpsi * lam) * p[P_TANPHI] - p[P_C] * r
+
+
+@njit(cache=True)
+def _cap_residual(p, sn, ts, lam, k3):
+    s = sn / (1.0 + 2.0 * p[P_KN] * lam)
+    t = ts / (1.0 + 2.0 * p[P_CS] * p[P_KS] * lam)
+    dk = 2.0 * lam * math.sqrt(s * s + (p[P_CS] * t) ** 2)
+    sc = cap_strength(p, k3 + dk)
+    return s * s + p[P_CS] * t * t - sc * sc
+
+
+@njit(cache=True)
+def _bisect_tension(p, sn_tr, k1, k2):
+    lo = 0.0
+    hi = sn_tr / p[P_KN]
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if _tension_residual(p, sn_tr, mid, k1, k2) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-15 * hi:
+            break
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _bisect_shear(p, at, sn, tpsi, k1, k2):
+    lo = 0.0
+    hi = at / p[P_KS]
+    if _shear_residual(p, at, sn, tpsi, hi, k1, k2) > 0.0:
+        return hi  # even τ = 0 violates f2 (a tension corner): tension takes the rest
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if _shear_residual(p, at, sn, tpsi, mid, k1, k2) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-15 * hi:
+            break
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _bisect_cap(p, sn, ts, k3):
+    lo = 0.0
+    hi = 1.0 / p[P_KN]
+    while _cap_residual(p, sn, ts, hi, k3) > 0.0:
+        hi *= 2.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if _cap_residual(p, sn, ts, mid, k3) > 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-15 * hi:
+            break
+    return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2, g):
+    """Residuals of f1 = 0 and f2 = 0 and their Jacobian (g: (6,) written)."""
+    kn = p[P_KN]
+    ks = p[P_KS]
+    e1 = math.exp(-p[P_FT] * (k1 + l1) / p[P_GF1]) if p[P_FT] > 0.0 else 1.0
+    e2 = math.exp(-p[P_C] * (k2 + l2) / p[P_GF2]) if p[P_C] > 0.0 else 1.0
+    r1 = 0.0
+    r2 = 0.0
+    if e1 <= e2:
+        r = e1
+        if p[P_FT] > 0.0:
+            r1 = -p[P_FT] / p[P_GF1] * e1
+    else:
+        r = e2
+        r2 = -p[P_C] / p[P_GF2] * e2
+    sn = sn_tr - kn * (l1 + tpsi * l2)
+    g[0] = sn - p[P_FT] * r
+    g[1] = at - ks * l2 + sn * p[P_TANPHI] - p[P_C] * r
+    g[2] = -kn - p[P_FT] * r1
+    g[3] = -kn * tpsi - p[P_FT] * r2
+    g[4] = -kn * p[P_TANPHI] - p[P_C] * r1
+    g[5] = -ks - kn * tpsi * p[P_TANPHI] - p[P_C] * r2
+
+
+@njit(cache=True)
+def _tension_shear_return(p, sn_tr, at, k1, k2, tpsi):
+    """Plastic multipliers (λ1 opening, λ2 slip) that bring the trial tractions back onto
+    the tension cut-off, the Coulomb surface or their corner."""
+    scale = p[P_FT] + p[P_C] + abs(sn_tr) + at
+    tol = 1e-12 * scale
+    # tension alone
+    if sn_tr > p[P_FT] * softening_factor(p, k1, k2):
+        l1 = _bisect_tension(p, sn_tr, k1, k2)
+        sn = sn_tr - p[P_KN] * l1
+        if at + sn * p[P_TANPHI] - p[P_C] * softening_factor(p, k1 + l1, k2) <= tol:
+            return l1, 0.0
+    # shear alone
+    if at > 0.0:
+        l2 = _bisect_shear(p, at, sn_tr, tpsi, k1, k2)
+        sn = sn_tr - p[P_KN] * tpsi * l2
+        if sn - p[P_FT] * softening_factor(p, k1, k2 + l2) <= tol:
+            return 0.0, l2
+    # the corner: Newton on (λ1, λ2), kept non-negative
+    g = np.empty(6)
+    l1 = 0.0
+    l2 = 0.0
+    for _ in range(100):
+        _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2, g)
+        if abs(g[0]) <= tol and abs(g[1]) <= tol:
+            break
+        det = g[2] * g[5] - g[3] * g[4]
+        d1 = -(g[5] * g[0] - g[3] * g[1]) / det
+        d2 = -(-g[4] * g[0] + g[2] * g[1]) / det
+        l1 = max(l1 + d1, 0.0)
+        l2 = min(max(l2 + d2, 0.0), at / p[P_KS])
+    return l1, l2
+
+
+@njit(cache=True)
+def interface_law(p, dn, ds, s0, s1):
+    """Return mapping at one integration point.
+
+    Args:
+        p: (N_PROPS,) material properties.
+        dn, ds: relative normal (opening > 0) and tangential displacement [m].
+        s0: (N_STATE,) committed state (read).
+        s1: (N_STATE,) trial state (written): plastic displacements, κ's, status,
+            tractions σ, τ [Pa], dissipated energy per unit area [J/m²], dn, ds.
+    """
+    kn = p[P_KN]
+    ks = p[P_KS]
+    dnp = s0[S_DNP]
+    dsp = s0[S_DSP]
+    k1 = s0[S_K1]
+    k2 = s0[S_K2]
+    k3 = s0[S_K3]
+    diss = s0[S_DISS]
+    slid = False
+    for _ in range(6):
+        active = False
+        sn = kn * (dn - dnp)
+        ts = ks * (ds - dsp)
+        # --- tension cut-off and Coulomb friction (with their corner)
+        r = softening_factor(p, k1, k2)
+        at = abs(ts)
+        f1 = sn - p[P_FT] * r
+        f2 = at + sn * p[P_TANPHI] - p[P_C] * r
+        scale = p[P_FT] + p[P_C] + abs(sn) + at
+        if f1 > 1e-14 * scale or (f2 > 1e-14 * scale and at > 0.0):
+            tpsi = p[P_TANPSI]
+            if tpsi > 0.0:
+                if sn < 0.0 and p[P_SIGU] < 0.0:
+                    tpsi *= max(0.0, 1.0 - sn / p[P_SIGU])
+                tpsi *= math.exp(-p[P_DELTA] * k2)
+            l1, l2 = _tension_shear_return(p, sn, at, k1, k2, tpsi)
+            sg = 1.0 if ts > 0.0 else -1.0
+            dnp += l1 + tpsi * l2
+            dsp += sg * l2
+            k1 += l1
+            k2 += l2
+            sn = kn * (dn - dnp)
+            ts = ks * (ds - dsp)
+            diss += sn * (l1 + tpsi * l2) + abs(ts) * l2
+            if l2 > 0.0:
+                slid = True
+            active = True
+        # --- compression cap
+        if p[P_FC] > 0.0 and sn < 0.0:
+            sc = cap_strength(p, k3)
+            if sn * sn + p[P_CS] * ts * ts > sc * sc * (1.0 + 1e-12):
+                lam = _bisect_cap(p, sn, ts, k3)
+                s = sn / (1.0 + 2.0 * kn * lam)
+                t = ts / (1.0 + 2.0 * p[P_CS] * ks * lam)
+                ddn = 2.0 * lam * s
+                dds = 2.0 * lam * p[P_CS] * t
+                dnp += ddn
+                dsp += dds
+                k3 += math.sqrt(ddn * ddn + dds * dds)
+                sn = kn * (dn - dnp)
+                ts = ks * (ds - dsp)
+                diss += sn * ddn + ts * dds
+                active = True
+        if not active:
+            break
+    r = softening_factor(p, k1, k2)
+    if p[P_FC] > 0.0 and k3 > p[P_KP]:
+        status = CRUSHED
+    elif r <= BROKEN_R or (p[P_FT] == 0.0 and p[P_C] == 0.0):
+        status = OPEN if sn >= 0.0 and dn > 0.0 else SLIDING
+    elif r < 1.0 or k3 > 0.0:
+        status = SOFTENING
+    else:
+        status = INTACT
+    if slid and status < SOFTENING:
+        status = SOFTENING
+    s1[S_DNP] = dnp
+    s1[S_DSP] = dsp
+    s1[S_K1] = k1
+    s1[S_K2] = k2
+    s1[S_K3] = k3
+    s1[S_STATUS] = status
+    s1[S_SN] = sn
+    s1[S_TS] = ts
+    s1[S_DISS] = diss
+    s1[S_DN] = dn
+    s1[S_DS] = ds
+
+
+@njit(cache=True)
+def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, s1, f, energy):
+    """Forces of all bonded integration points (trial state from the committed one).
+
+    Args:
+        X: (n, 2) reference node coordinates [m] (local + ghost nodes).
+        u: (2n,) displacements [m].
+        ipa, ipb: (m, 2) end nodes of the facet on side A and on side B of each point
+            (A's interior lies to the left of a0→a1; B runs the other way).
+        xia, xib: (m,) position of the point along each facet (0 at the first node).
+        w: (m,) weight: tributary joint length × out-of-plane width [m²].
+        ipmat: (m,) joint material row in ``props``.
+        props: (k, N_PROPS) material properties.
+        alive: (m,) int8, 0 for points handed over to contact.
+        s0, s1: (m, N_STATE) committed and trial state.
+        f: (2n,) forces [N], added to.
+        energy: (2,) elastic energy stored and total dissipated energy [J] (written).
+    """
+    e_el = 0.0
+    e_dis = 0.0
+    for q in range(ipa.shape[0]):
+        if alive[q] == 0:
+            e_dis += w[q] * s0[q, S_DISS]
+            continue
+        p = props[ipmat[q]]
+        a0 = ipa[q, 0]
+        a1 = ipa[q, 1]
+        b0 = ipb[q, 0]
+        b1 = ipb[q, 1]
+        # joint frame from the current facets (B reversed): t along A, n out of A
+        tx = (X[a1, 0] + u[2 * a1] - X[a0, 0] - u[2 * a0]) + (
+            X[b0, 0] + u[2 * b0] - X[b1, 0] - u[2 * b1])
+        ty = (X[a1, 1] + u[2 * a1 + 1] - X[a0, 1] - u[2 * a0 + 1]) + (
+            X[b0, 1] + u[2 * b0 + 1] - X[b1, 1] - u[2 * b1 + 1])
+        ln = math.sqrt(tx * tx + ty * ty)
+        tx /= ln
+        ty /= ln
+        nx = ty
+        ny = -tx
+        ga = xia[q]
+        gb = xib[q]
+        dux = ((1.0 - gb) * u[2 * b0] + gb * u[2 * b1]) - ((1.0 - ga) * u[2 * a0] + ga * u[2 * a1])
+        duy = ((1.0 - gb) * u[2 * b0 + 1] + gb * u[2 * b1 + 1]) - (
+            (1.0 - ga) * u[2 * a0 + 1] + ga * u[2 * a1 + 1])
+        dn = dux * nx + duy * ny
+        ds = dux * tx + duy * ty
+        interface_law(p, dn, ds, s0[q], s1[q])
+        sn = s1[q, S_SN]
+        ts = s1[q, S_TS]
+        fx = w[q] * (sn * nx + ts * tx)
+        fy = w[q] * (sn * ny + ts * ty)
+        # the traction pulls B back towards A when the joint opens (σ > 0)
+        f[2 * a0] += (1.0 - ga) * fx
+        f[2 * a0 + 1] += (1.0 - ga) * fy
+        f[2 * a1] += ga * fx
+        f[2 * a1 + 1] += ga * fy
+        f[2 * b0] -= (1.0 - gb) * fx
+        f[2 * b0 + 1] -= (1.0 - gb) * fy
+        f[2 * b1] -= gb * fx
+        f[2 * b1 + 1] -= gb * fy
+        e_el += 0.5 * w[q] * (sn * sn / p[P_KN] + ts * ts / p[P_KS])
+        e_dis += w[q] * s1[q, S_DISS]
+    energy[E_ELASTIC] = e_el
+    energy[E_DISSIPATED] = e_dis
+
+
+@njit(cache=True)
+def commit(alive, s0, s1):
+    """Copy the trial state of live points into the committed state."""
+    for q in range(alive.shape[0]):
+        if alive[q]:
+            for j in range(s0.shape[1]):
+                s0[q, j] = s1[q, j]
+
+
+@njit(cache=True)
+def node_spring_bound(ipa, ipb, xia, xib, w, ipmat, props, alive, k):
+    """Per node Σ_ip max(k_n, k_s) w N_i [N/m] (k: (n,), added to)."""
+    for q in range(ipa.shape[0]):
+        if alive[q] == 0:
+            continue
+        p = props[ipmat[q]]
+        kk = max(p[P_KN], p[P_KS]) * w[q]
+        k[ipa[q, 0]] += (1.0 - xia[q]) * kk
+        k[ipa[q, 1]] += xia[q] * kk
+        k[ipb[q, 0]] += (1.0 - xib[q]) * kk
+        k[ipb[q, 1]] += xib[q] * kk
+
+
+def empty_state(m: int) -> np.ndarray:
+    return np.zeros((m, N_STATE))

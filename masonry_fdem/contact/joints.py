@@ -1,0 +1,525 @@
+"""Bonded joints: mortar joints between units and potential cracks inside units.
+
+At set-up, boundary facets of different blocks that coincide (collinear, facing each other,
+overlapping, within a tolerance) are paired into joint *segments*. Each segment carries two
+integration points at the ends of the overlap (Lobatto/nodal integration, which keeps
+interface tractions free of the oscillations Gauss points give), and each point carries the
+composite interface law of Lourenço & Rots (:mod:`._joint_kernels`): tension cut-off with
+exponential softening (G_fI), Coulomb friction with softening cohesion (G_fII) and
+dilatancy, and a compression cap with hardening and softening.
+
+The joint material of a pair of blocks is chosen, first match wins, by
+
+1. ``where`` rules: a predicate of the segment midpoint [m] (a ring interface, a zone of
+   decayed mortar);
+2. ``cracks``: pieces of the same fractured unit (:meth:`BlockMesh.fractured`) get the
+   crack law of the unit's material;
+3. ``materials``: the pair of block material names, in either order.
+
+``None`` as a joint material means a dry joint: no bond, the facets are left to the
+frictional contact (:class:`~masonry_fdem.contact.BlockContact`).
+
+A fully softened joint is Coulomb friction without tension, i.e. frictional contact with
+the joint's stiffness. A segment whose points have all broken (softening factor ≤ 1 %) and
+opened (no traction) is handed over to the block contact, so no force jumps; so is one that
+has slid by more than half its length (there the two contacts agree when the contact
+penalty equals the joint's k_n). While a segment is bonded, the block contact ignores its
+facet pair.
+
+Parallel: every rank knows every segment; a segment is computed by the rank holding the
+block of its lower facet id, and the nodes of the other facet are exchanged every step.
+
+Units: SI — stiffnesses in Pa/m, strengths in Pa, fracture energies in N/m (J/m²).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem.contact import _joint_kernels as JK
+from masonry_fdem.geometry.blockmesh import unit_name
+
+__all__ = ["JointMaterial", "Joints", "JOINT_STATES"]
+
+log = logging.getLogger(__name__)
+
+#: names of the status codes in the joint state field
+JOINT_STATES = ("intact", "softening", "open", "sliding", "crushed")
+
+
+@dataclass(frozen=True)
+class JointMaterial:
+    """A zero-thickness interface (mortar joint, ring interface, potential crack in a unit).
+
+    Attributes:
+        kn, ks: normal and shear stiffness [Pa/m]. For a mortar joint of thickness h_m
+            between units, k_n = E_u E_m / (h_m (E_u − E_m)). ``None``: ``penalty`` times
+            E/h with E the smaller Young's modulus of the two blocks and h the shorter facet
+            (for cracks inside fractured units: the stiffness then scales with the mesh,
+            so the elastic compliance the cracks add does not depend on it); k_s = k_n / (2(1+ν)).
+        ft: tensile strength [Pa] (0: no tension).
+        GfI: mode-I fracture energy [N/m].
+        c: cohesion [Pa].
+        tan_phi: friction coefficient tan φ.
+        GfII: mode-II fracture energy [N/m].
+        tan_psi: dilatancy tan ψ0 at zero normal stress and zero slip.
+        psi_confinement: σ_u < 0 [Pa], the compressive stress at which dilatancy vanishes
+            (None: no effect of confinement).
+        psi_decay: δ [1/m], dilatancy decays as exp(−δ κ_slip).
+        fc: compressive strength of the cap [Pa] (None: no cap).
+        Cs: shear contribution to the cap.
+        kappa_p: plastic relative displacement at the cap peak [m].
+        Gfc: compressive fracture energy [N/m] (area between the post-peak cap curve and
+            the residual strength f_c/7).
+        penalty: factor of the default stiffness (see kn).
+    """
+
+    kn: float | None = None
+    ks: float | None = None
+    ft: float = 0.0
+    GfI: float = 0.0
+    c: float = 0.0
+    tan_phi: float = 0.6
+    GfII: float = 0.0
+    tan_psi: float = 0.0
+    psi_confinement: float | None = None
+    psi_decay: float = 0.0
+    fc: float | None = None
+    Cs: float = 9.0
+    kappa_p: float = 1e-4
+    Gfc: float = 5000.0
+    penalty: float = 20.0
+
+    def __post_init__(self) -> None:
+        def need(ok, msg):
+            if not ok:
+                raise ValueError(f"JointMaterial: {msg}")
+
+        for name in ("ft", "GfI", "c", "tan_phi", "GfII", "tan_psi", "psi_decay", "Cs",
+                     "kappa_p", "Gfc", "penalty"):
+            val = getattr(self, name)
+            need(np.isfinite(val) and val >= 0, f"{name} must be finite and >= 0, got {val}")
+        for name in ("kn", "ks"):
+            val = getattr(self, name)
+            need(val is None or (np.isfinite(val) and val > 0), f"{name} must be > 0 Pa/m")
+        need(self.ft == 0 or self.GfI > 0, "a tensile strength ft > 0 needs GfI > 0 N/m")
+        need(self.c == 0 or self.GfII > 0, "a cohesion c > 0 needs GfII > 0 N/m")
+        need(self.penalty > 0, "penalty must be > 0")
+        if self.fc is not None:
+            need(np.isfinite(self.fc) and self.fc > 0, f"fc must be > 0 Pa, got {self.fc}")
+            need(self.kappa_p > 0 and self.Gfc > 0, "a cap needs kappa_p > 0 and Gfc > 0")
+        if self.psi_confinement is not None:
+            need(self.psi_confinement < 0, "psi_confinement must be < 0 Pa (compression)")
+
+    @property
+    def bonded(self) -> bool:
+        return self.ft > 0 or self.c > 0
+
+    def row(self, E: float, nu: float, h: float) -> np.ndarray:
+        """The kernel's property row; E [Pa], ν and h [m] give the default stiffness."""
+        kn = self.kn if self.kn is not None else self.penalty * E / h
+        ks = self.ks if self.ks is not None else kn / (2.0 * (1.0 + nu))
+        if self.ft > 0 and not kn > self.ft**2 / self.GfI:
+            raise ValueError(
+                f"JointMaterial: kn = {kn:.4g} Pa/m is below ft²/GfI = "
+                f"{self.ft**2 / self.GfI:.4g} Pa/m: the softening would snap back")
+        if self.c > 0 and not ks > self.c**2 / self.GfII:
+            raise ValueError(
+                f"JointMaterial: ks = {ks:.4g} Pa/m is below c²/GfII = "
+                f"{self.c**2 / self.GfII:.4g} Pa/m: the softening would snap back")
+        p = np.zeros(JK.N_PROPS)
+        p[JK.P_KN] = kn
+        p[JK.P_KS] = ks
+        p[JK.P_FT] = self.ft
+        p[JK.P_GF1] = self.GfI
+        p[JK.P_C] = self.c
+        p[JK.P_TANPHI] = self.tan_phi
+        p[JK.P_GF2] = self.GfII
+        p[JK.P_TANPSI] = self.tan_psi
+        p[JK.P_SIGU] = self.psi_confinement if self.psi_confinement is not None else 0.0
+        p[JK.P_DELTA] = self.psi_decay
+        p[JK.P_FC] = self.fc if self.fc is not None else 0.0
+        p[JK.P_CS] = self.Cs
+        p[JK.P_KP] = self.kappa_p
+        p[JK.P_GFC] = self.Gfc
+        return p
+
+
+Rule = tuple[Callable[[np.ndarray], bool], "JointMaterial | None"]
+
+
+def coincident_facets(x: np.ndarray, facets: np.ndarray, facet_block: np.ndarray,
+                      tol: float) -> np.ndarray:
+    """Overlaps of facets of different blocks that lie on each other.
+
+    Returns:
+        (k, 4) float array: facet a, facet b (a < b), overlap start and end as
+        arclengths [m] along a.
+    """
+    from masonry_fdem.contact.adt import self_pairs
+
+    p0 = x[facets[:, 0]]
+    p1 = x[facets[:, 1]]
+    boxes = np.c_[np.minimum(p0, p1) - tol, np.maximum(p0, p1) + tol]
+    pairs = np.asarray(self_pairs(np.ascontiguousarray(boxes),
+                                  np.asarray(facet_block, dtype=np.int64)),
+                       dtype=np.int64).reshape(-1, 2)
+    if pairs.size == 0:
+        return np.zeros((0, 4))
+    pairs = np.sort(pairs, axis=1)
+    a, b = pairs[:, 0], pairs[:, 1]
+    da = p1[a] - p0[a]
+    la = np.linalg.norm(da, axis=1)
+    ta = da / la[:, None]
+    na = np.c_[ta[:, 1], -ta[:, 0]]
+    db = p1[b] - p0[b]
+    tb = db / np.linalg.norm(db, axis=1)[:, None]
+    anti = np.einsum("ij,ij->i", ta, tb) < -(1.0 - 1e-8)
+    dist0 = np.abs(np.einsum("ij,ij->i", p0[b] - p0[a], na))
+    dist1 = np.abs(np.einsum("ij,ij->i", p1[b] - p0[a], na))
+    s0 = np.einsum("ij,ij->i", p0[b] - p0[a], ta)
+    s1 = np.einsum("ij,ij->i", p1[b] - p0[a], ta)
+    lo = np.maximum(0.0, np.minimum(s0, s1))
+    hi = np.minimum(la, np.maximum(s0, s1))
+    ok = anti & (dist0 <= tol) & (dist1 <= tol) & (hi - lo > tol)
+    return np.c_[a[ok], b[ok], lo[ok], hi[ok]]
+
+
+class Joints:
+    """The bonded joints of a model (collective constructor).
+
+    Args:
+        model: the :class:`~masonry_fdem.model.Model`.
+        materials: joint material per pair of block material names, e.g.
+            ``{("brick", "brick"): mortar, ("brick", "base"): mortar}``; None: dry.
+        cracks: crack law per material of fractured units (pieces of one unit).
+        where: ``[(predicate(midpoint) -> bool, material or None), ...]``, checked first.
+        contact: the :class:`~masonry_fdem.contact.BlockContact` that takes over broken
+            joints (and must ignore bonded ones); may be None.
+        tolerance: distance [m] within which facets coincide (default 1e-6 of the mean
+            boundary facet length).
+        check_every: commits between hand-over checks (collective).
+
+    Raises:
+        ValueError: two blocks touch along a facet and no joint material is given for them.
+    """
+
+    def __init__(
+        self,
+        model,
+        materials: Mapping[tuple[str, str], JointMaterial | None] | None = None,
+        *,
+        cracks: Mapping[str, JointMaterial] | None = None,
+        where: Sequence[Rule] = (),
+        contact=None,
+        tolerance: float | None = None,
+        check_every: int = 10,
+    ):
+        self.model = model
+        self.comm = comm = model.comm
+        self.contact = contact
+        self.check_every = int(check_every)
+        blocks = model.blocks
+        names = blocks.material_names
+        table: dict[tuple[str, str], JointMaterial | None] = {}
+        for (ma, mb), jm in (materials or {}).items():
+            for nm in (ma, mb):
+                if nm not in names:
+                    raise ValueError(f"joint materials name unknown block material {nm!r}; "
+                                     f"the model has {list(names)}")
+            if jm is not None and not isinstance(jm, JointMaterial):
+                raise TypeError(f"joint material of {(ma, mb)} must be a JointMaterial or None")
+            table[(ma, mb)] = table[(mb, ma)] = jm
+        cracks = dict(cracks or {})
+        for nm, jm in cracks.items():
+            if nm not in names:
+                raise ValueError(f"cracks name unknown block material {nm!r}")
+            if not isinstance(jm, JointMaterial):
+                raise TypeError(f"crack law of {nm!r} must be a JointMaterial")
+        gf = np.asarray(blocks.boundary_facets, dtype=np.int64)
+        fblock = np.asarray(blocks.facet_block, dtype=np.int64)
+        x = blocks.x
+        flen = np.linalg.norm(x[gf[:, 1]] - x[gf[:, 0]], axis=1)
+        self.tolerance = tol = float(tolerance) if tolerance is not None else 1e-6 * flen.mean()
+        seg = coincident_facets(x, gf, fblock, tol)
+        fa = seg[:, 0].astype(np.int64)
+        fb = seg[:, 1].astype(np.int64)
+        ba, bb = fblock[fa], fblock[fb]
+        mat_a = blocks.block_material[ba]
+        mat_b = blocks.block_material[bb]
+        unit = blocks.block_unit
+        la = flen[fa]
+        mid = x[gf[fa, 0]] + (0.5 * (seg[:, 2] + seg[:, 3]) / la)[:, None] * (
+            x[gf[fa, 1]] - x[gf[fa, 0]])
+        # ---- joint material of each segment
+        chosen: list[JointMaterial | None] = []
+        missing = set()
+        for k in range(seg.shape[0]):
+            jm = ...
+            for pred, rule_mat in where:
+                if pred(mid[k]):
+                    jm = rule_mat
+                    break
+            if jm is ...:
+                na, nb = names[mat_a[k]], names[mat_b[k]]
+                if unit[ba[k]] == unit[bb[k]]:
+                    if na not in cracks:
+                        raise ValueError(
+                            f"unit {unit_name(blocks.block_names[ba[k]])!r} is fractured but "
+                            f"no crack law is given for its material {na!r} (cracks=...)")
+                    jm = cracks[na]
+                elif (na, nb) in table:
+                    jm = table[(na, nb)]
+                else:
+                    missing.add(tuple(sorted((na, nb))))
+                    continue
+            chosen.append(jm)
+        if missing:
+            raise ValueError(
+                "blocks touch along joints but no joint material is given for the material "
+                f"pair(s) {sorted(missing)}; give a JointMaterial, or None for a dry joint")
+        bonded = np.array([jm is not None for jm in chosen], dtype=bool)
+        seg, fa, fb, mid = seg[bonded], fa[bonded], fb[bonded], mid[bonded]
+        mats = [jm for jm in chosen if jm is not None]
+        ba, bb = fblock[fa], fblock[fb]
+        # ---- property rows (default stiffness from the blocks' E and the facet length)
+        E = np.array([model.materials[n].E for n in names])
+        nu = np.array([model.materials[n].nu for n in names])
+        ma_, mb_ = blocks.block_material[ba], blocks.block_material[bb]
+        use_b = E[mb_] < E[ma_]
+        emin = np.where(use_b, E[mb_], E[ma_])
+        numin = np.where(use_b, nu[mb_], nu[ma_])
+        h = np.minimum(flen[fa], flen[fb])
+        rows = np.array([jm.row(emin[k], numin[k], h[k]) for k, jm in enumerate(mats)]
+                        ).reshape(-1, JK.N_PROPS)
+        self.props, seg_mat = np.unique(rows, axis=0, return_inverse=True)
+        if self.props.shape[0] == 0:
+            self.props = np.zeros((1, JK.N_PROPS))
+        seg_mat = np.asarray(seg_mat, dtype=np.int64).ravel()
+        # ---- two integration points per segment, at the ends of the overlap
+        nseg = seg.shape[0]
+        self.n_segments = nseg
+        self.seg_facets = np.c_[fa, fb]
+        self.seg_length = seg[:, 3] - seg[:, 2]
+        self.seg_mid = mid
+        n_g = gf.shape[0]
+        self.seg_key = np.minimum(fa, fb) * n_g + np.maximum(fa, fb)
+        s_ip = np.c_[seg[:, 2], seg[:, 3]].ravel()
+        q_seg = np.repeat(np.arange(nseg), 2)
+        qa, qb = fa[q_seg], fb[q_seg]
+        ga = s_ip / flen[qa]
+        pa = x[gf[qa, 0]] + ga[:, None] * (x[gf[qa, 1]] - x[gf[qa, 0]])
+        db = x[gf[qb, 1]] - x[gf[qb, 0]]
+        gb = np.einsum("ij,ij->i", pa - x[gf[qb, 0]], db) / np.einsum("ij,ij->i", db, db)
+        self.g_ipa = gf[qa]
+        self.g_ipb = gf[qb]
+        self.g_xia = np.clip(ga, 0.0, 1.0)
+        self.g_xib = np.clip(gb, 0.0, 1.0)
+        self.g_w = np.repeat(0.5 * self.seg_length, 2) * model.width
+        self.g_mat = seg_mat[q_seg]
+        self.q_seg = q_seg
+        # ---- this rank's points: those whose side-A block it holds
+        block_rank = model.block_ranks()
+        self.seg_rank = block_rank[fblock[fa]]
+        own_seg = self.seg_rank == comm.rank
+        self.local_seg = np.flatnonzero(own_seg)
+        self.local_ip = np.flatnonzero(own_seg[q_seg])
+        self._setup_nodes(block_rank)
+        m = self.local_ip.size
+        self.xia = np.ascontiguousarray(self.g_xia[self.local_ip])
+        self.xib = np.ascontiguousarray(self.g_xib[self.local_ip])
+        self.w = np.ascontiguousarray(self.g_w[self.local_ip])
+        self.ipmat = np.ascontiguousarray(self.g_mat[self.local_ip])
+        self.alive = np.ones(m, dtype=np.int8)
+        self.s0 = JK.empty_state(m)
+        self.s1 = JK.empty_state(m)
+        self.energy = np.zeros(2)
+        self.n_commits = 0
+        self.released = np.zeros(nseg, dtype=bool)
+        if contact is not None:
+            contact.excluded = np.sort(self.seg_key)
+            contact.since = contact.settings.rebuild_every  # rebuild without them
+        # facet -> cell, for the state field
+        self._facet_cell = _facet_cells(blocks, gf)
+        if comm.rank == 0:
+            log.info("joints: %d bonded segments (%d integration points), %d dry",
+                     nseg, 2 * nseg, int((~bonded).sum()))
+
+    # ------------------------------------------------------------------ set-up
+    def _setup_nodes(self, block_rank: np.ndarray) -> None:
+        model = self.model
+        comm = self.comm
+        blocks = model.blocks
+        nloc = model.n_nodes
+        in2loc = np.full(blocks.n_nodes, -1, dtype=np.int64)
+        in2loc[model.node_input] = np.arange(nloc)
+        node_rank = block_rank[blocks.node_block]
+        # ghosts: side-B nodes of my points held by other ranks, by owner, sorted
+        recv = []
+        mine_b = np.unique(self.g_ipb[self.local_ip])
+        for r in range(comm.size):
+            recv.append(mine_b[node_rank[mine_b] == r] if r != comm.rank
+                        else np.zeros(0, np.int64))
+        ghosts = np.concatenate(recv) if recv else np.zeros(0, np.int64)
+        node_map = in2loc.copy()
+        node_map[ghosts] = nloc + np.arange(ghosts.size)
+        self.ipa = np.ascontiguousarray(node_map[self.g_ipa[self.local_ip]])
+        self.ipb = np.ascontiguousarray(node_map[self.g_ipb[self.local_ip]])
+        if np.any(self.ipa < 0) or np.any(self.ipb < 0):
+            raise RuntimeError("a joint node is neither local nor a ghost")
+        nn = nloc + ghosts.size
+        self.n_local_nodes = nloc
+        self.X = np.ascontiguousarray(np.r_[model.X, blocks.x[ghosts]])
+        self.u = np.zeros(2 * nn)
+        self.f = np.zeros(2 * nn)
+        self.exchange = None
+        if comm.size > 1:
+            from masonry_fdem.parallel import NodeExchange
+
+            send = []
+            for r in range(comm.size):
+                if r == comm.rank:
+                    send.append(np.zeros(0, np.int64))
+                    continue
+                theirs = self.seg_rank[self.q_seg] == r
+                nb = np.unique(self.g_ipb[theirs])
+                nb = nb[node_rank[nb] == comm.rank]
+                send.append(in2loc[nb])
+            self.exchange = NodeExchange(comm, send, [len(g) for g in recv])
+            self._ghost_u = np.zeros((self.exchange.n_ghost, 2))
+
+    # ------------------------------------------------------------------ solver interface
+    def _local_node_bound(self) -> np.ndarray:
+        """Per local node Σ_ip max(k_n, k_s) w N_i [N/m] over all points (any rank)."""
+        m = self.model
+        k = np.zeros(m.blocks.n_nodes)
+        alive = np.ones(self.g_w.size, dtype=np.int8)
+        alive[np.repeat(self.released, 2)] = 0
+        JK.node_spring_bound(self.g_ipa, self.g_ipb, self.g_xia, self.g_xib, self.g_w,
+                             self.g_mat, self.props, alive, k)
+        return k[m.node_input]
+
+    def stable_omega2(self) -> float:
+        """Gerschgorin bound of the ω² [1/s²] the joint springs add (collective)."""
+        m = self.model
+        rowsum = 2.0 * math.sqrt(2.0) * self._local_node_bound()
+        mask, _ = m.prescribed_arrays(0.0)
+        free = (mask[0::2] == 0) | (mask[1::2] == 0)
+        w2 = rowsum[free] / m.mass[0::2][free] if free.any() else np.zeros(1)
+        return self.comm.allreduce(float(w2.max()) if w2.size else 0.0, op=MPI.MAX)
+
+    def stiffness_rowsum(self) -> np.ndarray:
+        """(2 n_nodes,) bound of Σ_j |K_ij| [N/m] of the joint springs."""
+        return np.repeat(2.0 * math.sqrt(2.0) * self._local_node_bound(), 2)
+
+    def update_neighbours(self, v: np.ndarray, dt: float) -> None:
+        """Nothing to do: joints keep their partners."""
+
+    def add_forces(self, f: np.ndarray, v: np.ndarray, dt: float, damping: bool = True) -> None:
+        """Add the joint forces [N] at the current displacement (trial state; collective)."""
+        nloc = 2 * self.n_local_nodes
+        self.u[:nloc] = self.model.u.x.array[:nloc]
+        if self.exchange is not None:
+            self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
+            self.u[nloc:] = self._ghost_u.ravel()
+        self.f.fill(0.0)
+        JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
+                        self.ipmat, self.props, self.alive, self.s0, self.s1, self.f,
+                        self.energy)
+        f[:nloc] += self.f[:nloc]
+        if self.exchange is not None:
+            self.exchange.reverse(self.f[nloc:].reshape(-1, 2), f[:nloc].reshape(-1, 2))
+
+    def commit(self) -> None:
+        """Accept the trial state (every explicit step; a converged DR increment).
+
+        Every ``check_every`` commits, broken open segments (and segments slid by more than
+        half their length) are handed over to the block contact (collective).
+        """
+        JK.commit(self.alive, self.s0, self.s1)
+        self.n_commits += 1
+        if self.n_commits % self.check_every == 0:
+            self._hand_over()
+
+    def _hand_over(self) -> None:
+        s = self.s0
+        seg_local = self.q_seg[self.local_ip]
+        done_ip = (((s[:, JK.S_STATUS] == JK.OPEN))
+                   | (np.abs(s[:, JK.S_DS]) > 0.5 * self.seg_length[seg_local]))
+        # a segment goes when both its points are done
+        cnt = np.bincount(seg_local, weights=done_ip.astype(float), minlength=self.n_segments)
+        new = np.flatnonzero((cnt == 2) & ~self.released & (self.seg_rank == self.comm.rank))
+        allnew = np.concatenate(self.comm.allgather(new)).astype(np.int64)
+        if allnew.size == 0:
+            return
+        self.released[allnew] = True
+        self.alive[self.released[seg_local]] = 0
+        if self.contact is not None:
+            self.contact.excluded = np.sort(self.seg_key[~self.released])
+            self.contact.since = self.contact.settings.rebuild_every
+
+    # ------------------------------------------------------------------ results
+    def energies(self) -> dict[str, float]:
+        """Elastic energy stored in the joints and energy dissipated by them [J]."""
+        c = self.comm
+        return {"joint_elastic": c.allreduce(float(self.energy[JK.E_ELASTIC])),
+                "joint_dissipated": c.allreduce(float(self.energy[JK.E_DISSIPATED]))}
+
+    def _gather(self, cols) -> np.ndarray:
+        """(n_points, len(cols)) committed state columns on every rank, global order."""
+        parts = self.comm.allgather((self.local_ip, self.s0[:, cols]))
+        out = np.zeros((self.g_w.size, len(cols)))
+        for idx, vals in parts:
+            out[idx] = vals
+        return out
+
+    def status(self) -> np.ndarray:
+        """(n_segments,) worst status of each segment (codes: :data:`JOINT_STATES`)."""
+        st = self._gather([JK.S_STATUS])[:, 0].reshape(-1, 2).max(axis=1).astype(np.int64)
+        return st
+
+    def counts(self) -> dict[str, int]:
+        """Number of segments in each state (collective)."""
+        st = self.status()
+        return {name: int(np.sum(st == k)) for k, name in enumerate(JOINT_STATES)}
+
+    def tractions(self) -> np.ndarray:
+        """(n_points, 2) committed normal and shear traction [Pa] (tension > 0)."""
+        return self._gather([JK.S_SN, JK.S_TS])
+
+    def cell_state(self) -> np.ndarray:
+        """(n_cells,) worst state of the joints along each cell (BlockMesh order)."""
+        st = self.status()
+        out = np.zeros(self.model.blocks.n_cells)
+        for side in (0, 1):
+            np.maximum.at(out, self._facet_cell[self.seg_facets[:, side]], st)
+        return out
+
+    def segments(self) -> np.ndarray:
+        """(n_segments, 2, 2) end points [m] of each segment, deformed (side A)."""
+        blocks = self.model.blocks
+        u = self.model.displacement()
+        xy = blocks.x + u
+        a = self.g_ipa.reshape(-1, 2, 2)
+        xi = self.g_xia.reshape(-1, 2)
+        return (1 - xi)[..., None] * xy[a[..., 0]] + xi[..., None] * xy[a[..., 1]]
+
+
+def _facet_cells(blocks, gf: np.ndarray) -> np.ndarray:
+    """Cell of each boundary facet (BlockMesh ids)."""
+    cells = blocks.cells
+    n = blocks.n_nodes
+    edges = np.concatenate([cells[:, [0, 1]], cells[:, [1, 2]], cells[:, [2, 0]]])
+    owner = np.tile(np.arange(cells.shape[0]), 3)
+    key = edges[:, 0] * n + edges[:, 1]
+    order = np.argsort(key)
+    fk = gf[:, 0] * n + gf[:, 1]
+    pos = np.searchsorted(key[order], fk)
+    return owner[order][pos]

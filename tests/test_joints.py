@@ -1,0 +1,183 @@
+"""Bonded joints (Lourenço–Rots composite interface): one joint between two blocks driven by
+dynamic relaxation under displacement control, against the closed-form strengths and
+fracture energies of the law; a bonded wall at rest; bad input.
+
+The reference values are the law's parameters: peak tension f_t·A, peak shear
+(c + σ tan φ)·A, residual σ tan φ·A, fracture energies G_f·A as the area under the measured
+force–displacement curve (the curve ends at zero force, so no elastic energy is left), the
+cap strength f_c·A, and the dilatant uplift tan ψ0 (1 − e^(−δ s))/δ.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mpi4py import MPI
+
+from masonry_fdem import Material, Model
+from masonry_fdem.contact import JointMaterial, Joints
+from masonry_fdem.geometry import build_stack
+from masonry_fdem.solvers import DynamicRelaxation
+
+W, H, T = 0.2, 0.1, 0.1  # block width and height, out-of-plane thickness [m]
+A = W * T  # joint area [m²]
+MORTAR = dict(kn=1e11, ks=4e10, ft=0.3e6, GfI=12.0, c=0.4e6, GfII=50.0, tan_phi=0.75)
+
+
+def two_blocks(joint: JointMaterial, *, nu=0.0, comm=MPI.COMM_WORLD):
+    blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick", comm=comm)
+    model = Model(blocks, {"brick": Material(E=10e9, nu=nu, density=2000.0)}, width=T,
+                  comm=comm)
+    joints = Joints(model, {("brick", "brick"): joint})
+    model.fix_blocks("block:0", name="base")
+    return model, joints
+
+
+def drive(model, joints, path, component, name="platen"):
+    """Displacement-controlled DR along ``path`` [m]; returns (δ, reaction) arrays."""
+    dr = DynamicRelaxation(model, contact=joints, rtol=1e-8, max_iter=100_000)
+    assert dr.solve(0.0).converged
+    d_out, f_out = [0.0], [0.0]
+    for d in path:
+        val = (d, None) if component == 0 else (None, d)
+        res = dr.solve(0.0, displacement={name: val})
+        assert res.converged, f"no equilibrium at {d:.4g} m"
+        d_out.append(d)
+        f_out.append(dr.reactions()[name][component])
+    return np.array(d_out), np.array(f_out)
+
+
+def test_one_joint_is_found_and_bonded():
+    model, joints = two_blocks(JointMaterial(**MORTAR))
+    assert joints.n_segments >= 1
+    assert joints.seg_length.sum() == pytest.approx(W, rel=1e-9)
+    assert joints.counts()["intact"] == joints.n_segments
+
+
+def test_direct_tension_peak_and_mode_one_fracture_energy():
+    jm = JointMaterial(**MORTAR)
+    model, joints = two_blocks(jm)
+    model.fix(lambda X: np.isclose(X[1], 2 * H), name="platen")
+    d_el = jm.ft / jm.kn + jm.ft * H / 10e9
+    decay = jm.GfI / jm.ft
+    path = np.r_[np.linspace(0.0, 1.2 * d_el, 13)[1:], 1.2 * d_el + decay * np.geomspace(
+        1e-3, 14.0, 300)]
+    d, f = drive(model, joints, path, 1)
+    peak, energy = f.max(), np.trapezoid(f, d)
+    print(f"\ntension: peak {peak:.2f} N vs ft*A {jm.ft * A:.2f} N; "
+          f"energy {energy:.5f} J vs GfI*A {jm.GfI * A:.5f} J")
+    assert peak == pytest.approx(jm.ft * A, rel=0.01)
+    assert energy == pytest.approx(jm.GfI * A, rel=0.03)
+    assert f[-1] < 1e-4 * peak
+    assert joints.counts()["open"] == joints.n_segments
+    dissipated = joints.energies()["joint_dissipated"]
+    assert dissipated == pytest.approx(jm.GfI * A, rel=0.03)
+
+
+@pytest.mark.parametrize("sigma", [0.0, 0.2e6, 1.0e6])
+def test_direct_shear_peak_residual_and_mode_two_energy(sigma):
+    jm = JointMaterial(**MORTAR)
+    model, joints = two_blocks(jm, nu=0.15)
+    model.prescribe_velocity("block:1", (0.0, None), name="platen")
+    if sigma > 0:
+        model.add_pressure(lambda x: np.isclose(x[1], 2 * H), sigma, live=False)
+    tau_peak = jm.c + sigma * jm.tan_phi
+    decay = jm.GfII / jm.c
+    path = np.r_[np.linspace(0.0, 1.1 * tau_peak / jm.ks, 12)[1:],
+                 1.1 * tau_peak / jm.ks + decay * np.geomspace(5e-3, 14.0, 200)]
+    d, f = drive(model, joints, path, 0)
+    f = np.abs(f)
+    peak, residual = f.max(), f[-1]
+    print(f"\nshear at {sigma:.3g} Pa: peak {peak:.2f} N vs {tau_peak * A:.2f} N, residual "
+          f"{residual:.3f} N vs {sigma * jm.tan_phi * A:.3f} N")
+    assert peak == pytest.approx(tau_peak * A, rel=0.01)
+    assert residual == pytest.approx(sigma * jm.tan_phi * A, rel=0.01, abs=1e-3 * jm.c * A)
+    if sigma == 0.0:
+        energy = np.trapezoid(f, d)
+        print(f"shear energy {energy:.5f} J vs GfII*A {jm.GfII * A:.5f} J")
+        assert energy == pytest.approx(jm.GfII * A, rel=0.05)
+    else:
+        assert joints.counts()["sliding"] == joints.n_segments
+
+
+def test_dilatancy_uplift_decays_with_slip():
+    tan_psi, delta = 0.3, 2000.0
+    jm = JointMaterial(**(MORTAR | dict(tan_psi=tan_psi, psi_decay=delta)))
+    model, joints = two_blocks(jm)
+    model.prescribe_velocity("block:1", (0.0, None), name="platen")
+    slip_end = 2e-3
+    path = np.linspace(0.0, slip_end, 400)[1:]
+    d, _ = drive(model, joints, path, 0)
+    slip = slip_end - jm.c * np.exp(-jm.c * slip_end / jm.GfII) / jm.ks  # elastic part ~0
+    expected = tan_psi * (1.0 - np.exp(-delta * slip)) / delta
+    uplift = model.displacement()[:, 1].max()
+    print(f"\nuplift {uplift:.6e} m vs {expected:.6e} m")
+    assert uplift == pytest.approx(expected, rel=0.01)
+
+
+def test_compression_cap_peak():
+    jm = JointMaterial(**(MORTAR | dict(fc=10e6, Cs=9.0, kappa_p=1e-4, Gfc=5000.0)))
+    model, joints = two_blocks(jm)
+    model.fix(lambda X: np.isclose(X[1], 2 * H), name="platen")
+    d_el = jm.fc / jm.kn + jm.fc * H / 10e9
+    path = -np.linspace(0.0, d_el + 3 * jm.kappa_p, 120)[1:]
+    d, f = drive(model, joints, path, 1)
+    peak = -f.min()
+    print(f"\ncap: peak {peak:.1f} N vs fc*A {jm.fc * A:.1f} N")
+    assert peak == pytest.approx(jm.fc * A, rel=0.02)
+    assert -f[-1] < 0.95 * peak  # softening after the peak
+    assert joints.counts()["crushed"] == joints.n_segments
+
+
+def test_bonded_wall_at_rest_stays_intact():
+    from masonry_fdem.geometry import mesh_blocks, wall_layout
+
+    wall = wall_layout(courses=4, bricks_per_course=3, brick_length=0.21, brick_height=0.052)
+    base = np.array([[-0.1, -0.1], [0.73, -0.1], [0.73, 0.0], [-0.1, 0.0]])
+    blocks = mesh_blocks([base, *wall.polygons], materials=["base", *wall.materials],
+                         names=["base", *wall.names], mesh_size=0.05)
+    mats = {n: Material(E=10e9, nu=0.15, density=1800.0) for n in blocks.material_names}
+    model = Model(blocks, mats, width=0.1)
+    mortar = JointMaterial(**MORTAR)
+    joints = Joints(model, {("brick", "brick"): mortar, ("brick", "base"): mortar})
+    model.fix_blocks("base", name="base")
+    model.add_gravity()
+    dr = DynamicRelaxation(model, contact=joints, rtol=1e-7)
+    res = dr.solve(1.0)
+    assert res.converged
+    counts = joints.counts()
+    print(f"\nwall at rest: {counts}")
+    assert counts["intact"] == joints.n_segments > 20
+    sn = joints.tractions()[:, 0]
+    assert sn.max() < 0.05 * mortar.ft
+
+
+def test_missing_joint_material_is_named():
+    blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick")
+    model = Model(blocks, {"brick": Material(E=10e9, nu=0.0, density=2000.0)}, width=T)
+    with pytest.raises(ValueError, match="brick"):
+        Joints(model, {})
+    with pytest.raises(ValueError, match="unknown block material 'stone'"):
+        Joints(model, {("stone", "brick"): JointMaterial(**MORTAR)})
+    dry = Joints(model, {("brick", "brick"): None})
+    assert dry.n_segments == 0
+
+
+@pytest.mark.parametrize("bad, match", [
+    (dict(kn=-1.0), "kn"),
+    (dict(ft=1e5, GfI=0.0), "GfI"),
+    (dict(c=1e5, GfII=0.0), "GfII"),
+    (dict(fc=-1.0), "fc"),
+    (dict(tan_phi=float("nan")), "tan_phi"),
+])
+def test_bad_joint_material(bad, match):
+    with pytest.raises(ValueError, match=match):
+        JointMaterial(**(MORTAR | bad))
+
+
+def test_softening_that_would_snap_back_is_refused():
+    blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick")
+    model = Model(blocks, {"brick": Material(E=10e9, nu=0.0, density=2000.0)}, width=T)
+    with pytest.raises(ValueError, match="snap back"):
+        Joints(model, {("brick", "brick"): JointMaterial(**(MORTAR | dict(kn=1e6)))})
