@@ -49,7 +49,8 @@ def precompile() -> None:
     from masonry_fdem.contact import _joint_kernels as J
 
     props = np.zeros((1, J.N_PROPS))
-    props[0, [J.P_KN, J.P_KS, J.P_FT, J.P_GF1, J.P_C, J.P_GF2, J.P_FC, J.P_KP, J.P_GFC]] = 1.0
+    props[0, [J.P_FT, J.P_GF1, J.P_C, J.P_GF2, J.P_FC, J.P_KP, J.P_GFC]] = 1.0
+    props[0, [J.P_KN, J.P_KS]] = 10.0
     ip = np.array([[0, 1]], dtype=np.int64)
     half = np.full(1, 0.5)
     s0 = J.empty_state(1)

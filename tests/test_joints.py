@@ -181,3 +181,33 @@ def test_softening_that_would_snap_back_is_refused():
     model = Model(blocks, {"brick": Material(E=10e9, nu=0.0, density=2000.0)}, width=T)
     with pytest.raises(ValueError, match="snap back"):
         Joints(model, {("brick", "brick"): JointMaterial(**(MORTAR | dict(kn=1e6)))})
+
+
+def test_broken_open_joint_is_handed_to_contact_without_a_force_jump():
+    from masonry_fdem.contact import BlockContact, ContactSettings
+
+    jm = JointMaterial(**MORTAR)
+    blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick")
+    model = Model(blocks, {"brick": Material(E=10e9, nu=0.0, density=2000.0)}, width=T)
+    contact = BlockContact(model, ContactSettings(penalty=jm.kn, friction=0.75))
+    joints = Joints(model, {("brick", "brick"): jm}, contact=contact, check_every=1)
+    model.fix_blocks("block:0", name="base")
+    model.fix(lambda X: np.isclose(X[1], 2 * H), name="platen")
+    dr = DynamicRelaxation(model, contact=[contact, joints], rtol=1e-8, max_iter=100_000)
+    decay = jm.GfI / jm.ft
+    forces, handed = [], None
+    for k, d in enumerate(np.r_[np.linspace(1e-6, 12 * decay, 120)]):
+        assert dr.solve(0.0, displacement={"platen": (0.0, d)}).converged
+        forces.append(dr.reactions()["platen"][1])
+        if handed is None and joints.released.all():
+            handed = k
+    assert handed is not None, "the open joint was not handed over"
+    f = np.array(forces)
+    # no jump: the force just before and after the hand-over is what softening left
+    assert abs(f[handed]) < 1e-3 * jm.ft * A
+    assert abs(f[handed + 1]) < 1e-3 * jm.ft * A
+    # closing again: the contact (penalty = k_n) carries compression
+    res = dr.solve(0.0, displacement={"platen": (0.0, -1e-6)})
+    assert res.converged
+    fc = dr.reactions()["platen"][1]
+    assert fc < -0.1 * jm.ft * A

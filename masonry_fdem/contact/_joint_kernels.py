@@ -201,6 +201,8 @@ def _tension_shear_return(p, sn_tr, at, k1, k2, tpsi):
         if abs(g[0]) <= tol and abs(g[1]) <= tol:
             break
         det = g[2] * g[5] - g[3] * g[4]
+        if det == 0.0:
+            break
         d1 = -(g[5] * g[0] - g[3] * g[1]) / det
         d2 = -(-g[4] * g[0] + g[2] * g[1]) / det
         l1 = max(l1 + d1, 0.0)

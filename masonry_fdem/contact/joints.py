@@ -20,8 +20,8 @@ The joint material of a pair of blocks is chosen, first match wins, by
 frictional contact (:class:`~masonry_fdem.contact.BlockContact`).
 
 A fully softened joint is Coulomb friction without tension, i.e. frictional contact with
-the joint's stiffness. A segment whose points have all broken (softening factor ≤ 1 %) and
-opened (no traction) is handed over to the block contact, so no force jumps; so is one that
+the joint's stiffness. A segment whose points have all softened (to ``release_ratio`` of
+their strength) and opened is handed over to the block contact, so no force jumps; so is one that
 has slid by more than half its length (there the two contacts agree when the contact
 penalty equals the joint's k_n). While a segment is bonded, the block contact ignores its
 facet pair.
@@ -206,6 +206,8 @@ class Joints:
         tolerance: distance [m] within which facets coincide (default 1e-6 of the mean
             boundary facet length).
         check_every: commits between hand-over checks (collective).
+        release_ratio: an open joint goes to the contact once its strength has softened
+            to this fraction (the force then jumps by at most this fraction of the peak).
 
     Raises:
         ValueError: two blocks touch along a facet and no joint material is given for them.
@@ -221,11 +223,15 @@ class Joints:
         contact=None,
         tolerance: float | None = None,
         check_every: int = 10,
+        release_ratio: float = 1e-4,
     ):
         self.model = model
         self.comm = comm = model.comm
         self.contact = contact
         self.check_every = int(check_every)
+        self.release_ratio = float(release_ratio)
+        if self.check_every < 1 or not 0 < self.release_ratio < 1:
+            raise ValueError("check_every must be >= 1 and release_ratio in (0, 1)")
         blocks = model.blocks
         names = blocks.material_names
         table: dict[tuple[str, str], JointMaterial | None] = {}
@@ -343,9 +349,8 @@ class Joints:
         self.energy = np.zeros(2)
         self.n_commits = 0
         self.released = np.zeros(nseg, dtype=bool)
-        if contact is not None:
-            contact.excluded = np.sort(self.seg_key)
-            contact.since = contact.settings.rebuild_every  # rebuild without them
+        self.seg_blocks = np.c_[fblock[fa], fblock[fb]]
+        self._tell_contact()
         # facet -> cell, for the state field
         self._facet_cell = _facet_cells(blocks, gf)
         if comm.rank == 0:
@@ -451,7 +456,14 @@ class Joints:
     def _hand_over(self) -> None:
         s = self.s0
         seg_local = self.q_seg[self.local_ip]
-        done_ip = (((s[:, JK.S_STATUS] == JK.OPEN))
+        p = self.props[self.ipmat]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            e1 = np.where(p[:, JK.P_FT] > 0,
+                          np.exp(-p[:, JK.P_FT] * s[:, JK.S_K1] / p[:, JK.P_GF1]), 1.0)
+            e2 = np.where(p[:, JK.P_C] > 0,
+                          np.exp(-p[:, JK.P_C] * s[:, JK.S_K2] / p[:, JK.P_GF2]), 1.0)
+        spent = np.minimum(e1, e2) <= self.release_ratio
+        done_ip = (((s[:, JK.S_STATUS] == JK.OPEN) & spent)
                    | (np.abs(s[:, JK.S_DS]) > 0.5 * self.seg_length[seg_local]))
         # a segment goes when both its points are done
         cnt = np.bincount(seg_local, weights=done_ip.astype(float), minlength=self.n_segments)
@@ -461,9 +473,19 @@ class Joints:
             return
         self.released[allnew] = True
         self.alive[self.released[seg_local]] = 0
-        if self.contact is not None:
-            self.contact.excluded = np.sort(self.seg_key[~self.released])
-            self.contact.since = self.contact.settings.rebuild_every
+        self._tell_contact()
+
+    def _tell_contact(self) -> None:
+        """The contact ignores bonded facet pairs, and pairs of blocks bonded all round."""
+        c = self.contact
+        if c is None:
+            return
+        c.excluded = np.sort(self.seg_key[~self.released])
+        bonded = np.zeros(self.model.blocks.n_blocks, dtype=bool)
+        bonded[self.seg_blocks.ravel()] = True
+        bonded[self.seg_blocks[self.released].ravel()] = False
+        c.bonded_block = bonded
+        c.since = c.settings.rebuild_every  # rebuild before the next step
 
     # ------------------------------------------------------------------ results
     def energies(self) -> dict[str, float]:
@@ -502,11 +524,12 @@ class Joints:
             np.maximum.at(out, self._facet_cell[self.seg_facets[:, side]], st)
         return out
 
-    def segments(self) -> np.ndarray:
-        """(n_segments, 2, 2) end points [m] of each segment, deformed (side A)."""
+    def segments(self, scale: float = 1.0) -> np.ndarray:
+        """(n_segments, 2, 2) end points [m] of each segment on side A, displaced by
+        ``scale`` times the displacement (collective)."""
         blocks = self.model.blocks
         u = self.model.displacement()
-        xy = blocks.x + u
+        xy = blocks.x + scale * u
         a = self.g_ipa.reshape(-1, 2, 2)
         xi = self.g_xia.reshape(-1, 2)
         return (1 - xi)[..., None] * xy[a[..., 0]] + xi[..., None] * xy[a[..., 1]]

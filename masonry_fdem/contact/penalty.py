@@ -160,6 +160,8 @@ class BlockContact:
         self.keys = np.zeros(0, dtype=np.int64)
         # facet-pair keys (min·n + max of global facet ids) left out: bonded joints
         self.excluded = np.zeros(0, dtype=np.int64)
+        # blocks held on every side by intact bonded joints: no contact between two of them
+        self.bonded_block = np.zeros(blocks.n_blocks, dtype=bool)
         self.energy = np.zeros(3)
         self.dissipated = 0.0
         self.travel = math.inf
@@ -318,6 +320,9 @@ class BlockContact:
         me = comm.rank
         keep = ((ra == me) & (rb == me)) | ((ra == me) & (rb > me)) | ((rb == me) & (ra > me))
         pairs = pairs[keep]
+        both = (self.bonded_block[self.facet_block[pairs[:, 0]]]
+                & self.bonded_block[self.facet_block[pairs[:, 1]]])
+        pairs = pairs[~both]
         # orient each pair by global facet id, so its two passes keep their meaning
         ga = self.ext_gid[pairs[:, 0]]
         gb = self.ext_gid[pairs[:, 1]]

@@ -23,6 +23,7 @@ def plot_blocks(
     title: str | None = None,
     cmap: str = "viridis",
     show_edges: bool = False,
+    joints=None,
 ) -> Path | None:
     """Draw the blocks in their deformed position, coloured by a field (collective).
 
@@ -35,6 +36,9 @@ def plot_blocks(
         title: picture title.
         cmap: matplotlib colour map.
         show_edges: draw the triangle edges.
+        joints: the model's :class:`~masonry_fdem.contact.Joints`: joints that are not
+            intact are drawn over the blocks, coloured by state (softening, open, sliding,
+            crushed) — the crack pattern.
 
     Returns:
         The path on rank 0, None on other ranks.
@@ -69,6 +73,10 @@ def plot_blocks(
             cell_values = arr
         else:
             raise ValueError("field array must have one value per node or per cell")
+    jseg = jstate = None
+    if joints is not None:
+        jstate = joints.status()
+        jseg = joints.segments(scale)
     if model.comm.rank != 0:
         return None
     import matplotlib
@@ -90,6 +98,17 @@ def plot_blocks(
             ax.triplot(tri, "k-", lw=0.1)
     seg = xy[blocks.boundary_facets]
     ax.add_collection(LineCollection(seg, colors="k", linewidths=0.4))
+    if jseg is not None:
+        from masonry_fdem.contact.joints import JOINT_STATES
+
+        colours = {1: "gold", 2: "red", 3: "blue", 4: "magenta"}
+        for code, colour in colours.items():
+            sel = jstate == code
+            if sel.any():
+                ax.add_collection(LineCollection(jseg[sel], colors=colour, linewidths=1.6,
+                                                 label=JOINT_STATES[code]))
+        if np.any(jstate > 0):
+            ax.legend(loc="upper right", fontsize=7)
     fig.colorbar(pc, ax=ax, label=label, shrink=0.8)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")

@@ -1,7 +1,9 @@
 """ParaView output through dolfinx's VTXWriter (ADIOS2 BP files).
 
 Two time series in the run folder: ``displacement.bp`` (nodal displacement and velocity,
-P1) and ``stress.bp`` (Cauchy stress per cell, DG0). Open them in ParaView with the ADIOS2
+P1) and ``stress.bp`` (Cauchy stress per cell, DG0); with bonded joints a third,
+``joints.bp``: the worst joint state along each cell's edges (DG0; 0 intact, 1 softening,
+2 open, 3 sliding, 4 crushed, see :data:`masonry_fdem.contact.JOINT_STATES`). Open them in ParaView with the ADIOS2
 VTX reader and apply "Warp By Vector" on the displacement.
 """
 
@@ -25,8 +27,9 @@ class VTXOutput:
         folder: output folder (created).
     """
 
-    def __init__(self, model, folder: str | Path):
+    def __init__(self, model, folder: str | Path, joints=None):
         self.model = model
+        self.joints = joints
         self.folder = Path(folder)
         if model.comm.rank == 0:
             self.folder.mkdir(parents=True, exist_ok=True)
@@ -39,6 +42,13 @@ class VTXOutput:
         self._cell = dolfinx.io.VTXWriter(
             model.comm, self.folder / "stress.bp", [model.stress], engine="BP4"
         )
+        self._joint = None
+        if joints is not None:
+            Q = dolfinx.fem.functionspace(model.mesh, ("DG", 0))
+            self.joint_state = dolfinx.fem.Function(Q, name="joint_state")
+            self._joint = dolfinx.io.VTXWriter(
+                model.comm, self.folder / "joints.bp", [self.joint_state], engine="BP4"
+            )
 
     def write(self, t: float, velocity=None) -> None:
         """Write displacement [m], velocity [m/s] and Cauchy stress [Pa] at time t [s]."""
@@ -48,10 +58,18 @@ class VTXOutput:
         self.model.update_stress()
         self._nodal.write(t)
         self._cell.write(t)
+        if self._joint is not None:
+            state = self.joints.cell_state()
+            cells = self.model.dmesh.cell_input
+            self.joint_state.x.array[: cells.size] = state[cells]
+            self.joint_state.x.scatter_forward()
+            self._joint.write(t)
 
     def close(self) -> None:
         self._nodal.close()
         self._cell.close()
+        if self._joint is not None:
+            self._joint.close()
 
     def __enter__(self) -> VTXOutput:
         return self
