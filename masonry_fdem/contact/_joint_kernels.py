@@ -150,8 +150,8 @@ def _bisect_cap(p, sn, ts, k3):
 
 
 @njit(cache=True)
-def _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2, g):
-    """Residuals of f1 = 0 and f2 = 0 and their Jacobian (g: (6,) written)."""
+def _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2):
+    """Residuals of f1 = 0 and f2 = 0 and their Jacobian (g0, g1, J00, J01, J10, J11)."""
     kn = p[P_KN]
     ks = p[P_KS]
     e1 = math.exp(-p[P_FT] * (k1 + l1) / p[P_GF1]) if p[P_FT] > 0.0 else 1.0
@@ -166,12 +166,12 @@ def _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2, g):
         r = e2
         r2 = -p[P_C] / p[P_GF2] * e2
     sn = sn_tr - kn * (l1 + tpsi * l2)
-    g[0] = sn - p[P_FT] * r
-    g[1] = at - ks * l2 + sn * p[P_TANPHI] - p[P_C] * r
-    g[2] = -kn - p[P_FT] * r1
-    g[3] = -kn * tpsi - p[P_FT] * r2
-    g[4] = -kn * p[P_TANPHI] - p[P_C] * r1
-    g[5] = -ks - kn * tpsi * p[P_TANPHI] - p[P_C] * r2
+    return (sn - p[P_FT] * r,
+            at - ks * l2 + sn * p[P_TANPHI] - p[P_C] * r,
+            -kn - p[P_FT] * r1,
+            -kn * tpsi - p[P_FT] * r2,
+            -kn * p[P_TANPHI] - p[P_C] * r1,
+            -ks - kn * tpsi * p[P_TANPHI] - p[P_C] * r2)
 
 
 @njit(cache=True)
@@ -193,18 +193,17 @@ def _tension_shear_return(p, sn_tr, at, k1, k2, tpsi):
         if sn - p[P_FT] * softening_factor(p, k1, k2 + l2) <= tol:
             return 0.0, l2
     # the corner: Newton on (λ1, λ2), kept non-negative
-    g = np.empty(6)
     l1 = 0.0
     l2 = 0.0
     for _ in range(100):
-        _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2, g)
-        if abs(g[0]) <= tol and abs(g[1]) <= tol:
+        g0, g1, j00, j01, j10, j11 = _corner_residual(p, sn_tr, at, k1, k2, tpsi, l1, l2)
+        if abs(g0) <= tol and abs(g1) <= tol:
             break
-        det = g[2] * g[5] - g[3] * g[4]
+        det = j00 * j11 - j01 * j10
         if det == 0.0:
             break
-        d1 = -(g[5] * g[0] - g[3] * g[1]) / det
-        d2 = -(-g[4] * g[0] + g[2] * g[1]) / det
+        d1 = -(j11 * g0 - j01 * g1) / det
+        d2 = -(-j10 * g0 + j00 * g1) / det
         l1 = max(l1 + d1, 0.0)
         l2 = min(max(l2 + d2, 0.0), at / p[P_KS])
     return l1, l2
