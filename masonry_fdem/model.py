@@ -41,6 +41,9 @@ from masonry_fdem.materials import (
     svk_energy_density,
     svk_second_piola,
 )
+from masonry_fdem.materials.base import LawContext
+from masonry_fdem.materials.plasticity import ReturnMapping
+from masonry_fdem.materials.quadrature import QuadratureState
 from masonry_fdem.parallel import DistributedBlockMesh, create_block_mesh
 from masonry_fdem.solvers import _kernels as K
 
@@ -50,6 +53,9 @@ if TYPE_CHECKING:
 __all__ = ["Model", "BlockSelection", "Prescription"]
 
 log = logging.getLogger(__name__)
+
+#: quadrature degree of the internal-force form: one point per P1 triangle
+QUADRATURE_DEGREE = 1
 
 #: A set of blocks: a name or glob pattern ("brick:*"), a block id, a sequence of those,
 #: or a predicate on the block centroid (x, y) [m].
@@ -158,54 +164,92 @@ class Model:
         mat_ids = self.dmesh.cell_tags_material
         self.dx = ufl.Measure("dx", domain=mesh, subdomain_data=mat_ids)
         self.ds = ufl.Measure("ds", domain=mesh)
+        # the constitutive laws: one quadrature point per P1 cell (∇u is constant there)
+        self.qstate = QuadratureState(mesh, self.dmesh.cell_material, QUADRATURE_DEGREE)
+        dxq = ufl.Measure("dx", domain=mesh, subdomain_data=mat_ids,
+                          metadata=self.qstate.metadata)
         u = self.u
         w = ufl.TestFunction(self.V)
         self.w_const = dolfinx.fem.Constant(mesh, self.width)
         self.lam: dict[int, dolfinx.fem.Constant] = {}
         self.mu: dict[int, dolfinx.fem.Constant] = {}
         self.rho: dict[int, dolfinx.fem.Constant] = {}
+        self.law_context: dict[int, LawContext] = {}
         H = ufl.grad(u)
         F = ufl.Identity(2) + H
         E = green_lagrange(H)
+        h = ufl.sqrt(2.0 * ufl.CellVolume(mesh))
+        h_cells = np.sqrt(2.0 * self.blocks.cell_area)
         f_int = 0
         energy = 0
         for mid, name in enumerate(self.blocks.material_names):
-            lam, mu = lame_parameters(self.materials[name], self.hypothesis)
+            mat = self.materials[name]
+            in_mat = self.blocks.cell_material == mid
+            if np.any(in_mat):
+                mat.check_mesh(float(h_cells[in_mat].max()), self.hypothesis)
+            lam, mu = lame_parameters(mat, self.hypothesis)
             self.lam[mid] = dolfinx.fem.Constant(mesh, lam)
             self.mu[mid] = dolfinx.fem.Constant(mesh, mu)
-            self.rho[mid] = dolfinx.fem.Constant(mesh, self.materials[name].density)
-            S = svk_second_piola(E, self.lam[mid], self.mu[mid])
-            f_int += ufl.inner(F * S, ufl.grad(w)) * self.w_const * self.dx(mid)
-            energy += svk_energy_density(E, self.lam[mid], self.mu[mid]) * self.w_const * self.dx(
-                mid
-            )
+            self.rho[mid] = dolfinx.fem.Constant(mesh, mat.density)
+            k = LawContext(mesh, u, H, F, E, self.lam[mid], self.mu[mid], self.hypothesis, h)
+            if isinstance(mat, ReturnMapping):
+                self.qstate.add_return_mapping(mid, mat, k, self.hypothesis)
+            self.qstate.add_history(mid, mat, k)
+            self.law_context[mid] = k
+            P = mat.first_piola(k)
+            if getattr(P, "ufl_shape", None) != (2, 2):
+                raise ValueError(f"material {name!r}: first_piola() must give a 2x2 UFL tensor")
+            f_int += ufl.inner(P, ufl.grad(w)) * self.w_const * dxq(mid)
+            energy += mat.energy_density(k) * self.w_const * dxq(mid)
+        self.qstate.finalise()
         self.f_int_form = dolfinx.fem.form(f_int)
         self.energy_form = dolfinx.fem.form(energy)
         self._constants = dolfinx.fem.pack_constants(self.f_int_form)
         self._coeffs = dolfinx.fem.pack_coefficients(self.f_int_form)
-        # index of each packed coefficient entry into u.x.array: pack a known field
-        arr = self.u.x.array
-        saved = arr.copy()
-        arr[:] = np.arange(arr.size, dtype=arr.dtype)
-        probe = dolfinx.fem.pack_coefficients(self.f_int_form)
-        arr[:] = saved
-        self._gather = {}
-        for key, packed in probe.items():
-            idx = np.rint(packed).astype(np.int64).ravel()
-            if not np.allclose(packed.ravel(), idx):
-                raise RuntimeError("unexpected coefficient packing (non-permutation)")
-            self._gather[key] = idx
-        # Cauchy stress per cell for output: one expression per material on its cells
+        self._setup_packing(f_int)
+        # Cauchy stress per cell for output: one expression per material on its cells,
+        # at the quadrature point (one per cell: the DG0 value)
         self.S_space = dolfinx.fem.functionspace(mesh, ("DG", 0, (2, 2)))
         self.stress = dolfinx.fem.Function(self.S_space, name="stress")
         self._stress_expr = []
-        for mid in range(len(self.blocks.material_names)):
-            cells = np.flatnonzero(self.dmesh.cell_material == mid).astype(np.int32)
-            S = svk_second_piola(E, self.lam[mid], self.mu[mid])
-            expr = dolfinx.fem.Expression(
-                cauchy_stress(F, S), self.S_space.element.interpolation_points
-            )
+        for mid, name in enumerate(self.blocks.material_names):
+            cells = self.qstate.cells(mid)
+            P = self.materials[name].first_piola(self.law_context[mid])
+            expr = dolfinx.fem.Expression(P * F.T / ufl.det(F), self.qstate.points)
             self._stress_expr.append((cells, expr))
+
+    def _setup_packing(self, ufl_form) -> None:
+        """Index of each packed coefficient entry into its function's array.
+
+        The form's coefficient functions (u, committed history, kernel stresses) are filled
+        with disjoint ranges of integers and packed once; the packed numbers say where
+        each entry comes from. Each evaluation then gathers the entries without dolfinx's
+        per-call packing overhead.
+        """
+        functions = [c for c in ufl_form.coefficients() if hasattr(c, "x")]
+        saved = [f.x.array.copy() for f in functions]
+        offsets = [0]
+        for f in functions:
+            n = f.x.array.size
+            f.x.array[:] = offsets[-1] + np.arange(n, dtype=np.float64)
+            offsets.append(offsets[-1] + n)
+        probe = dolfinx.fem.pack_coefficients(self.f_int_form)
+        for f, a in zip(functions, saved):
+            f.x.array[:] = a
+        offsets = np.asarray(offsets)
+        self._gather = []
+        for key, packed in probe.items():
+            flat = packed.ravel()
+            code = np.rint(flat).astype(np.int64)
+            if not np.allclose(flat, code):
+                raise RuntimeError("unexpected coefficient packing (non-permutation)")
+            which = np.searchsorted(offsets, code, side="right") - 1
+            for i, f in enumerate(functions):
+                pos = np.flatnonzero(which == i).astype(np.int64)
+                if pos.size:
+                    idx = (code[pos] - offsets[i]).astype(np.int64)
+                    self._gather.append((key, f.x.array, idx, pos))
+        self._packed_flat = {key: packed.reshape(-1) for key, packed in self._coeffs.items()}
 
     def _setup_mass(self) -> None:
         w = ufl.TestFunction(self.V)
@@ -446,13 +490,68 @@ class Model:
         """Assemble f_int(u) [N] into ``out`` (preallocated; local dofs, no ghosts)."""
         if out is None:
             out = self.f_int
-        arr = self.u.x.array
-        for key, idx in self._gather.items():
-            packed = self._coeffs[key]
-            K.gather(arr, idx, packed.reshape(-1))
+        self.qstate.update()
+        for key, arr, idx, pos in self._gather:
+            K.gather_to(arr, idx, pos, self._packed_flat[key])
         out.fill(0.0)
         _cpp.fem.assemble_vector(out, self.f_int_form._cpp_object, self._constants, self._coeffs)
         return out
+
+    def commit_state(self) -> None:
+        """Accept the material state (history, plastic strain) at the current displacement.
+
+        The solvers call it: the explicit solver every step, dynamic relaxation when a
+        load increment has converged. Between commits, every internal-force evaluation
+        recomputes the trial state from the committed one.
+        """
+        self.qstate.commit()
+
+    @property
+    def rate_time_step(self) -> float:
+        """Time increment [s] seen by rate-dependent (Perzyna) laws; inf: rate independent."""
+        return self.qstate.t_rate
+
+    @rate_time_step.setter
+    def rate_time_step(self, dt: float) -> None:
+        if not dt > 0:
+            raise ValueError(f"time increment must be > 0 s, got {dt}")
+        self.qstate.t_rate = float(dt)
+
+    def history(self, name: str) -> np.ndarray:
+        """Committed history variable ``name`` per local cell (NaN where a material does
+        not have it), e.g. "kappa" of :class:`~masonry_fdem.materials.RankineDamage`."""
+        out = np.full(self.qstate.n_cells, np.nan)
+        found = False
+        for mid, k in self.law_context.items():
+            if name in k.state:
+                found = True
+                cells = self.qstate.cells(mid)
+                vals = k.state[name].x.array[self.qstate.qdofs[cells]]
+                out[cells] = vals.mean(axis=1)
+        if not found:
+            raise ValueError(f"no material of this model has a history variable {name!r}")
+        return out
+
+    def plastic_state(self) -> np.ndarray:
+        """Committed return-mapping state per local cell, columns as in
+        :mod:`masonry_fdem.materials._finite_plastic` (Cᵖ⁻¹ − I, α the accumulated
+        equivalent plastic strain, the elastic ε_zz, plastic work density [J/m³]); rows of
+        other materials are zero."""
+        qs = self.qstate
+        if not qs.has_return_mapping:
+            raise ValueError("no material of this model has a return mapping")
+        return qs.s0[qs.qdofs].mean(axis=1)
+
+    def plastic_work(self) -> float:
+        """Plastic work ∫ σ:dεᵖ w dX [J] dissipated so far (collective)."""
+        qs = self.qstate
+        if not qs.has_return_mapping:
+            return 0.0
+        from masonry_fdem.materials.plasticity import PK
+
+        area = np.abs(self.blocks.cell_area[self.dmesh.cell_input])
+        wp = qs.s0[qs.qdofs, PK.S_WP].mean(axis=1)
+        return self.comm.allreduce(float(np.dot(wp, area)) * self.width)
 
     def update_constants(self) -> None:
         """Re-pack the form constants after changing a material Constant."""
@@ -533,9 +632,10 @@ class Model:
         return self.dmesh.block_rank
 
     def reset(self) -> None:
-        """Zero displacement and velocity."""
+        """Zero displacement and velocity; material state back to virgin."""
         self.u.x.array[:] = 0.0
         self.v[:] = 0.0
+        self.qstate.reset()
 
     def __repr__(self) -> str:
         return (

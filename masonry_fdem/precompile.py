@@ -22,6 +22,10 @@ def precompile() -> None:
     m = np.ones(n)
     mask = np.zeros(n, dtype=np.int8)
     K.gather(u, np.zeros(n, dtype=np.int64), v)
+    K.gather_to(u, np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), v)
+    from masonry_fdem.materials.quadrature import scatter_rows
+
+    scatter_rows(np.zeros((2, 3)), np.zeros(2, dtype=np.int64), np.zeros((3, 3)))
     K.central_difference_step(u, v, f, f, f, m, m, mask, v, 0.0, 1e-3, f.copy(),
                               np.zeros(K.N_ENERGY))
     K.dr_measure(u, u, v, f, f, f, m, mask, np.zeros(4))
@@ -63,6 +67,21 @@ def precompile() -> None:
                         np.zeros(4))
     J.interface_law(props[0], 2.0, 1.0, s0[0], s1[0])
     J.interface_law(props[0], -2.0, 0.5, s0[0], s1[0])
+
+    from masonry_fdem.materials import _plastic_kernels as PK
+    from masonry_fdem.materials import MohrCoulomb, DruckerPrager
+
+    strain = np.array([[1e-3, -2e-3, 5e-4], [1e-3, -2e-3, 5e-4]])
+    qps = np.arange(2, dtype=np.int64)
+    for law in (MohrCoulomb(density=1.0, E=1e6, nu=0.2, c=100.0, phi=30.0),
+                DruckerPrager(density=1.0, E=1e6, nu=0.2, c=100.0, phi=30.0, viscosity=1.0)):
+        for hyp in ("plane_strain", "plane_stress"):
+            s0 = np.zeros((2, PK.N_STATE))
+            PK.plastic_update(strain, s0, s0.copy(), np.zeros((2, 4)), np.zeros(2), qps,
+                              law.kernel_params(hyp), 1e-3)
+            law.return_map(np.zeros((2, 4)) + 1e-3, s0, s0.copy(), np.zeros((2, 4)),
+                           np.zeros(2), qps, law.kernel_params(hyp), 1e-3)
+    PK.yield_value(np.zeros(4), 0.0, law.kernel_params("plane_strain"))
 
     from masonry_fdem.contact.adt import brute_force_pairs, query_adt, self_pairs
 

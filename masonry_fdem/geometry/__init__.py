@@ -21,6 +21,7 @@ Lengths are in metres, areas in square metres.
 
 from masonry_fdem.geometry.arches import ArchKind, arch_curve, arch_layout, build_arch
 from masonry_fdem.geometry.blockmesh import BlockMesh, unit_name
+from masonry_fdem.geometry.grids import crossed_grid, graded
 from masonry_fdem.geometry.layout import (
     BlockLayout,
     block_on_base_layout,
@@ -35,6 +36,8 @@ from masonry_fdem.geometry.msh import read_msh, write_msh
 from masonry_fdem.geometry.polygons import as_polygon, polygon_area, polygon_centroid, rectangle
 
 __all__ = [
+    "crossed_grid",
+    "graded",
     "ArchKind",
     "BlockLayout",
     "BlockMesh",

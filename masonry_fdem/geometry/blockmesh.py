@@ -53,6 +53,10 @@ class BlockMesh:
         block_material: ``(n_blocks,)`` int32 index into ``material_names``.
         material_names: material of each material id.
         block_names: unique name of each block, e.g. ``"brick:0:3"``, ``"base"``.
+        zone_material: ``(n_cells,)`` int32 material id of each cell for a mesh whose
+            blocks may hold several materials (a footing cast on its soil, a weaker band
+            of a specimen), else None. A mixed block's ``block_material`` is its most
+            common material (used for contact and joint defaults).
 
     The constructor checks that the arrays are already in this canonical form; use
     :meth:`from_arrays` for anything else.
@@ -65,6 +69,7 @@ class BlockMesh:
     block_material: np.ndarray
     material_names: tuple[str, ...]
     block_names: tuple[str, ...]
+    zone_material: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         coerce = {
@@ -79,6 +84,9 @@ class BlockMesh:
             if arr.ndim != ndim:
                 raise ValueError(f"BlockMesh.{name} must have {ndim} dimensions")
             object.__setattr__(self, name, arr)
+        if self.zone_material is not None:
+            zm = np.ascontiguousarray(self.zone_material, dtype=np.int32).ravel()
+            object.__setattr__(self, "zone_material", zm)
         object.__setattr__(self, "material_names", tuple(str(m) for m in self.material_names))
         object.__setattr__(self, "block_names", tuple(str(b) for b in self.block_names))
         self._check()
@@ -99,6 +107,10 @@ class BlockMesh:
         nm = len(self.material_names)
         if np.any(self.block_material < 0) or np.any(self.block_material >= nm):
             raise ValueError("BlockMesh.block_material out of range of material_names")
+        zm = self.zone_material
+        if zm is not None and (zm.shape != (cells.shape[0],) or np.any(zm < 0)
+                               or np.any(zm >= nm)):
+            raise ValueError("BlockMesh.zone_material needs one material id in range per cell")
         cb = np.repeat(np.arange(nb), np.diff(co))
         lo, hi = no[cb], no[cb + 1]
         if np.any(cells < lo[:, None]) or np.any(cells >= hi[:, None]):
@@ -120,6 +132,7 @@ class BlockMesh:
         material_names: Sequence[str],
         block_material: np.ndarray | Sequence[int] | None = None,
         cell_material: np.ndarray | Sequence[int] | None = None,
+        mixed_materials: bool = False,
     ) -> BlockMesh:
         """Build a block mesh from a triangle soup with a block id per cell.
 
@@ -135,7 +148,9 @@ class BlockMesh:
             material_names: name of each material id.
             block_material: ``(n_blocks,)`` material id of each block. Give this or
                 ``cell_material``; if neither, there must be exactly one material.
-            cell_material: ``(m,)`` material id of each cell, constant within a block.
+            cell_material: ``(m,)`` material id of each cell, constant within a block
+                unless ``mixed_materials``.
+            mixed_materials: allow blocks of several materials (zones of one continuum).
 
         Returns:
             The validated, canonical block mesh.
@@ -180,7 +195,8 @@ class BlockMesh:
             empty = [names[b] for b in np.flatnonzero(counts == 0)]
             raise ValueError(f"blocks without cells: {_listed(empty)}")
         mats = tuple(str(m) for m in material_names)
-        bmat = cls._block_materials(cell_block, nb, mats, block_material, cell_material, names)
+        bmat, zones = cls._block_materials(cell_block, nb, mats, block_material, cell_material,
+                                           names, mixed_materials)
 
         # orientation and degeneracy
         a2 = _twice_area(x, cells)
@@ -224,10 +240,12 @@ class BlockMesh:
             block_material=bmat,
             material_names=mats,
             block_names=names,
+            zone_material=None if zones is None else zones[cell_order],
         )
 
     @staticmethod
-    def _block_materials(cell_block, nb, mats, block_material, cell_material, names):
+    def _block_materials(cell_block, nb, mats, block_material, cell_material, names,
+                         mixed=False):
         if not mats:
             raise ValueError("material_names must not be empty")
         if block_material is not None and cell_material is not None:
@@ -244,10 +262,17 @@ class BlockMesh:
             hi = np.full(nb, np.iinfo(np.int64).min)
             np.minimum.at(lo, cell_block, cm)
             np.maximum.at(hi, cell_block, cm)
-            mixed = np.flatnonzero(lo != hi)
-            if mixed.size:
+            several = np.flatnonzero(lo != hi)
+            if several.size and not mixed:
                 raise ValueError(f"blocks with more than one material: "
-                                 f"{_listed(names[b] for b in mixed)}")
+                                 f"{_listed(names[b] for b in several)} "
+                                 "(pass mixed_materials=True for zones of one continuum)")
+            if several.size:
+                if cm.min() < 0 or cm.max() >= len(mats):
+                    raise ValueError(f"material ids must lie in [0, {len(mats)})")
+                counts = np.zeros((nb, len(mats)), dtype=np.int64)
+                np.add.at(counts, (cell_block, cm), 1)
+                return counts.argmax(axis=1).astype(np.int32), cm.astype(np.int32)
             bmat = lo
         elif len(mats) == 1:
             bmat = np.zeros(nb, dtype=np.int64)
@@ -255,7 +280,7 @@ class BlockMesh:
             raise ValueError("several material names: give block_material or cell_material")
         if bmat.min() < 0 or bmat.max() >= len(mats):
             raise ValueError(f"material ids must lie in [0, {len(mats)})")
-        return bmat.astype(np.int32)
+        return bmat.astype(np.int32), None
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -291,6 +316,8 @@ class BlockMesh:
     @cached_property
     def cell_material(self) -> np.ndarray:
         """``(n_cells,)`` int32 material id of each cell."""
+        if self.zone_material is not None:
+            return self.zone_material
         return self.block_material[self.cell_block]
 
     @property
@@ -468,7 +495,8 @@ class BlockMesh:
             np.repeat(np.arange(ids.size), np.diff(self.cell_offsets)[ids]),
             block_names=[self.block_names[b] for b in ids],
             material_names=self.material_names,
-            block_material=self.block_material[ids],
+            cell_material=self.cell_material[cell_idx],
+            mixed_materials=self.zone_material is not None,
         )
 
     def fractured(self, sel=None, *, material=None) -> BlockMesh:
@@ -484,7 +512,7 @@ class BlockMesh:
         """
         chosen = np.zeros(self.n_blocks, dtype=bool)
         chosen[self.select(sel, material=material)] = True
-        xs, cells, cb, names, bmat = [], [], [], [], []
+        xs, cells, cb, names, cmat = [], [], [], [], []
         n = 0
         for b in range(self.n_blocks):
             c = self.cells[self.cell_offsets[b]:self.cell_offsets[b + 1]]
@@ -495,7 +523,7 @@ class BlockMesh:
                     n += 3
                     cb.append([len(names)])
                     names.append(f"{self.block_names[b]}#{k}")
-                    bmat.append(self.block_material[b])
+                    cmat.append([self.cell_material[self.cell_offsets[b] + k]])
             else:
                 nodes = np.arange(self.node_offsets[b], self.node_offsets[b + 1])
                 xs.append(self.x[nodes])
@@ -503,10 +531,11 @@ class BlockMesh:
                 n += nodes.size
                 cb.append(np.full(c.shape[0], len(names)))
                 names.append(self.block_names[b])
-                bmat.append(self.block_material[b])
+                cmat.append(self.cell_material[self.cell_offsets[b]:self.cell_offsets[b + 1]])
         return BlockMesh.from_arrays(
             np.concatenate(xs), np.concatenate(cells), np.concatenate(cb),
-            block_names=names, material_names=self.material_names, block_material=bmat,
+            block_names=names, material_names=self.material_names,
+            cell_material=np.concatenate(cmat), mixed_materials=self.zone_material is not None,
         )
 
     @cached_property
@@ -526,6 +555,7 @@ class BlockMesh:
             "block_material": self.block_material,
             "material_names": self.material_names,
             "block_names": self.block_names,
+            "zone_material": self.zone_material,
         }
 
 

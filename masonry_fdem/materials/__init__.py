@@ -1,5 +1,8 @@
-"""Constitutive laws of the blocks (UFL expressions) and their parameters."""
+"""Constitutive laws of the blocks: UFL stresses, history at quadrature points, and
+return mappings in numba (see :mod:`masonry_fdem.materials.base` for the interface)."""
 
+from masonry_fdem.materials.base import LawContext
+from masonry_fdem.materials.damage import RankineDamage
 from masonry_fdem.materials.elastic import (
     Hypothesis,
     Material,
@@ -9,10 +12,16 @@ from masonry_fdem.materials.elastic import (
     svk_energy_density,
     svk_second_piola,
 )
+from masonry_fdem.materials.plasticity import DruckerPrager, MohrCoulomb, ReturnMapping
 
 __all__ = [
+    "DruckerPrager",
     "Hypothesis",
+    "LawContext",
     "Material",
+    "MohrCoulomb",
+    "RankineDamage",
+    "ReturnMapping",
     "cauchy_stress",
     "green_lagrange",
     "lame_parameters",

@@ -41,12 +41,18 @@ class Hypothesis(Enum):
 
 @dataclass(frozen=True)
 class Material:
-    """Elastic block material.
+    """Block material: St. Venant–Kirchhoff elasticity, and the base of every block law.
 
     Args:
         density: mass density ρ [kg/m³], > 0.
         E: Young's modulus [Pa], > 0.
         nu: Poisson's ratio, -1 < ν < 0.5.
+
+    A subclass changes the law by overriding :meth:`second_piola` (a stress from the
+    Green–Lagrange strain) or :meth:`first_piola`, and may keep history variables at the
+    quadrature points (:meth:`history`, :meth:`trial_history`); see
+    :mod:`masonry_fdem.materials.base`. E and ν remain the initial elastic constants: they
+    bound the stable time step and set default contact stiffnesses.
     """
 
     density: float
@@ -65,6 +71,31 @@ class Material:
             raise ValueError(f"Young's modulus E must be > 0 Pa, got {self.E}")
         if not -1.0 < self.nu < 0.5:
             raise ValueError(f"Poisson's ratio nu must satisfy -1 < nu < 0.5, got {self.nu}")
+
+    # ---------------------------------------------------------------- the law (UFL)
+    def second_piola(self, k):
+        """Second Piola–Kirchhoff stress S [Pa] from ``k.E`` (St. Venant–Kirchhoff)."""
+        return svk_second_piola(k.E, k.lam, k.mu)
+
+    def first_piola(self, k):
+        """First Piola–Kirchhoff stress P = F S [Pa]; what the internal force integrates."""
+        return k.F * self.second_piola(k)
+
+    def energy_density(self, k):
+        """Stored energy per reference volume [J/m³] (St. Venant–Kirchhoff)."""
+        return svk_energy_density(k.E, k.lam, k.mu)
+
+    def history(self) -> dict[str, float]:
+        """Scalar history variables at the quadrature points and their initial values."""
+        return {}
+
+    def trial_history(self, k) -> dict:
+        """The value each history variable takes if the current state is accepted (UFL)."""
+        return {}
+
+    def check_mesh(self, h_max: float, hypothesis: Hypothesis) -> None:
+        """Raise ValueError if the law cannot be used with elements of size up to
+        ``h_max`` [m] (a softening law that would snap back)."""
 
     def wave_speed(self, hypothesis: Hypothesis) -> float:
         """Dilatational wave speed of the 2D continuum [m/s]."""

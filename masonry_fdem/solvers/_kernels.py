@@ -26,6 +26,13 @@ def gather(src, index, out):
 
 
 @njit(cache=True)
+def gather_to(src, index, pos, out):
+    """out[pos[k]] = src[index[k]] (coefficient packing of one function)."""
+    for k in range(index.size):
+        out[pos[k]] = src[index[k]]
+
+
+@njit(cache=True)
 def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, damping, dt,
                             reaction, energy):
     """One central-difference step with lumped mass and mass-proportional damping.

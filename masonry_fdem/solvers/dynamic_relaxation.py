@@ -74,7 +74,8 @@ class DynamicRelaxation:
             springs enter the fictitious masses; their forces (without restitution damping)
             enter the residual; friction slips by the fictitious displacement increments.
             Joint states are trial states computed from the last converged increment and
-            committed only when an increment converges.
+            committed only when an increment converges. So is the material state of the
+            blocks (damage, plastic strain): committed only at a converged increment.
     """
 
     def __init__(
@@ -116,6 +117,7 @@ class DynamicRelaxation:
         self,
         load_factor: float = 1.0,
         displacement: Mapping[str, Sequence[float | None]] | None = None,
+        dt: float | None = None,
     ) -> DRResult:
         """Bring the model to equilibrium under ``f_dead + load_factor · f_live``.
 
@@ -124,8 +126,11 @@ class DynamicRelaxation:
             displacement: displacement control: ``{prescription name: (ux, uy)}`` [m]
                 sets the prescribed dofs of that prescription (a loading platen) to these
                 total displacements (``None``: leave that component as it is).
+            dt: the physical duration of the increment [s] seen by rate-dependent
+                (Perzyna) laws; None: infinitely slow loading (the rate-independent limit).
         """
         m = self.model
+        m.rate_time_step = math.inf if dt is None else dt
         comm = m.comm
         if displacement:
             self.prescribe(displacement)
@@ -167,6 +172,7 @@ class DynamicRelaxation:
             K.dr_update(u, self.v, f_net, self.f_ext, self.mfict, self.presc, c, self.dt,
                         it == 1)
         if converged:
+            m.commit_state()
             for c in self.interactions:
                 if hasattr(c, "commit"):
                     c.commit()

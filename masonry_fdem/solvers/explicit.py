@@ -130,6 +130,7 @@ class ExplicitSolver:
             self.vp[p.dofs] = p.value(t_half)
         if callable(self.load_factor):
             m.external_force(self._factor(self.t), out=self.f_ext)
+        m.qstate.t_rate = self.dt  # rate-dependent laws see the physical step
         m.internal_force(self.model.f_int)
         if self.interactions:
             self.f_con.fill(0.0)
@@ -138,6 +139,7 @@ class ExplicitSolver:
                 c.add_forces(self.f_con, m.v, self.dt)
                 if hasattr(c, "commit"):
                     c.commit()
+        m.commit_state()
         K.central_difference_step(
             m.u.x.array, m.v, m.f_int, self.f_ext, self.f_con, m.mass, m.minv, self.presc,
             self.vp, self.damping, self.dt, self.reaction, self.energy,

@@ -1,0 +1,160 @@
+"""Material state at the quadrature points of a model (history variables, return mapping).
+
+One :class:`QuadratureState` per :class:`~masonry_fdem.model.Model`. It owns
+
+* the quadrature space ``Q`` (scalar) of the internal-force form, one degree for all
+  materials (for P1 triangles one point per cell, exact for every law since ∇u is
+  constant on a cell);
+* the COMMITTED history variables of UFL laws (functions in ``Q``) and the compiled
+  expressions of their trial values, which :meth:`commit` evaluates at the quadrature
+  points;
+* for return-mapping laws: the displacement gradient evaluated at their points, the committed
+  and trial state arrays, and the stress and elastic-energy functions the kernels write
+  (``Q4``: Sxx, Syy, Sxy, Szz).
+
+:meth:`update` computes trial states from the committed ones at the current displacement
+(every internal-force evaluation); :meth:`commit` accepts them (the explicit solver every
+step, dynamic relaxation when an increment has converged). Nothing is allocated in either.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+import masonry_fdem._compat  # noqa: F401
+import basix
+import basix.ufl
+import dolfinx
+import dolfinx.fem
+import ufl
+
+__all__ = ["QuadratureState"]
+
+
+@njit(cache=True)
+def scatter_rows(src, rows, dst):
+    """dst[rows[i], :] = src[i, :] for 2D arrays (src flattened per row)."""
+    w = dst.shape[1]
+    for i in range(rows.size):
+        r = rows[i]
+        for j in range(w):
+            dst[r, j] = src[i, j]
+
+
+class QuadratureState:
+    """History and return-mapping state of the materials of one model (see module doc)."""
+
+    def __init__(self, mesh, cell_material: np.ndarray, degree: int):
+        self.mesh = mesh
+        self.degree = int(degree)
+        cell = mesh.basix_cell()
+        self.Q = dolfinx.fem.functionspace(
+            mesh, basix.ufl.quadrature_element(cell, value_shape=(), degree=self.degree))
+        self.points = self.Q.element.interpolation_points
+        self.nqp = self.points.shape[0]
+        self.n_cells = mesh.topology.index_map(2).size_local
+        self.cell_material = cell_material
+        self.qdofs = np.ascontiguousarray(self.Q.dofmap.list, dtype=np.int64)
+        self.n_q = self.Q.dofmap.index_map.size_local
+        self.metadata = {"quadrature_degree": self.degree}
+        self.t_rate = math.inf  # time increment [s] for rate-dependent laws
+        self._history = []  # (function, expression, cells, rows, buffer)
+        self._rm = []  # (material, prm, qps)
+        self._rm_cells: list[np.ndarray] = []
+        self.stress_fn = None
+        self.energy_fn = None
+
+    # ------------------------------------------------------------------ set-up
+    def cells(self, mid: int) -> np.ndarray:
+        return np.flatnonzero(self.cell_material == mid).astype(np.int32)
+
+    def add_history(self, mid: int, material, k) -> None:
+        """Create the committed history functions of a UFL law into ``k.state``."""
+        init = material.history()
+        cells = self.cells(mid)
+        for name, value in init.items():
+            fn = dolfinx.fem.Function(self.Q, name=f"{name}[{mid}]")
+            fn.x.array[:] = float(value)
+            k.state[name] = fn
+        trial = material.trial_history(k)
+        if set(trial) != set(init):
+            raise ValueError(
+                f"{type(material).__name__}: trial_history() gives {sorted(trial)} but "
+                f"history() declares {sorted(init)}")
+        for name, expr in trial.items():
+            compiled = dolfinx.fem.Expression(expr, self.points)
+            rows = self.qdofs[cells].ravel()
+            buf = np.zeros((cells.size, self.nqp))
+            self._history.append((k.state[name], compiled, cells, rows, buf, float(init[name])))
+
+    def add_return_mapping(self, mid: int, material, k, hypothesis) -> None:
+        """Stress and energy of a return-mapping law come from its kernel."""
+        from masonry_fdem.materials.plasticity import N_STATE
+
+        if self.stress_fn is None:
+            el4 = basix.ufl.quadrature_element(self.mesh.basix_cell(), value_shape=(4,),
+                                               degree=self.degree)
+            Q4 = dolfinx.fem.functionspace(self.mesh, el4)
+            if not np.array_equal(Q4.dofmap.list, self.Q.dofmap.list):
+                raise RuntimeError("unexpected quadrature dof layout")
+            self.stress_fn = dolfinx.fem.Function(Q4, name="stress_qp")
+            self.energy_fn = dolfinx.fem.Function(self.Q, name="energy_qp")
+            self.stress = self.stress_fn.x.array.reshape(-1, 4)
+            self.energy = self.energy_fn.x.array
+            self.s0 = np.zeros((self.n_q, N_STATE))
+            self.s1 = np.zeros((self.n_q, N_STATE))
+            self.strain = np.zeros((self.n_q, 4))  # displacement gradient H
+            H = k.H
+            self._strain_expr = dolfinx.fem.Expression(
+                ufl.as_vector([H[0, 0], H[0, 1], H[1, 0], H[1, 1]]), self.points)
+        cells = self.cells(mid)
+        self._rm_cells.append(cells)
+        qps = np.ascontiguousarray(self.qdofs[cells].ravel())
+        self._rm.append((material, material.kernel_params(hypothesis), qps))
+        s = self.stress_fn
+        k.stress = ufl.as_matrix([[s[0], s[2]], [s[2], s[1]]])
+        k.energy = self.energy_fn
+
+    def finalise(self) -> None:
+        if self._rm:
+            self.rm_cells = np.ascontiguousarray(np.concatenate(self._rm_cells))
+            self.rm_rows = np.ascontiguousarray(self.qdofs[self.rm_cells].ravel())
+            self._strain_buf = np.zeros((self.rm_cells.size, self.nqp, 4))
+            self.update()  # initial stress (zero strain) so that the form is consistent
+
+    @property
+    def has_return_mapping(self) -> bool:
+        return bool(self._rm)
+
+    # ------------------------------------------------------------------ per step
+    def update(self) -> None:
+        """Trial states and stresses of the return-mapping laws at the current u."""
+        if not self._rm:
+            return
+        if self.rm_cells.size:
+            self._strain_expr.eval(self.mesh, self.rm_cells, values=self._strain_buf)
+            scatter_rows(self._strain_buf.reshape(-1, 4), self.rm_rows, self.strain)
+        for material, prm, qps in self._rm:
+            material.return_map(self.strain, self.s0, self.s1, self.stress, self.energy, qps,
+                                prm, self.t_rate)
+
+    def commit(self) -> None:
+        """Accept the trial state at the current displacement."""
+        for fn, expr, cells, rows, buf, _ in self._history:
+            if cells.size:
+                expr.eval(self.mesh, cells, values=buf)
+                scatter_rows(buf.reshape(-1, 1), rows, fn.x.array.reshape(-1, 1))
+        if self._rm:
+            self.s0[:] = self.s1
+
+    def reset(self) -> None:
+        """Back to the virgin state (initial history values, no plastic strain)."""
+        for fn, _, _, _, _, init in self._history:
+            fn.x.array[:] = init
+        if self._rm:
+            self.s0[:] = 0.0
+            self.s1[:] = 0.0
+            self.update()

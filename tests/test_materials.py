@@ -1,0 +1,223 @@
+"""Single-element and patch tests of the block laws against their analytic response in
+uniaxial stress and in simple shear (dynamic relaxation on a four-triangle patch): 1e-8
+relative for the elastic laws, 1 % for the inelastic ones."""
+
+from __future__ import annotations
+
+import math
+import runpy
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from masonry_fdem import Material
+from masonry_fdem.materials import (
+    DruckerPrager,
+    MohrCoulomb,
+    RankineDamage,
+    lame_parameters,
+)
+from masonry_fdem.materials import Hypothesis
+from material_patch import L, Patch, svk_uniaxial
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = runpy.run_path(str(ROOT / "demos" / "materials.py"), run_name="materials_lib")
+
+STEEL = dict(density=7850.0, E=200e9, nu=0.3)
+STONE = dict(density=2400.0, E=20e9, nu=0.2)
+
+
+def rel(a, b):
+    return abs(a - b) / abs(b)
+
+
+def svk_P(lam, mu, H):
+    F = np.eye(2) + H
+    E = 0.5 * (H + H.T + H.T @ H)
+    S = lam * np.trace(E) * np.eye(2) + 2 * mu * E
+    return F @ S
+
+
+def shear_H(g):
+    return np.array([[0.0, g], [0.0, 0.0]])
+
+
+# ------------------------------------------------------------------ elastic laws
+@pytest.mark.parametrize("hyp", ["plane_stress", "plane_strain"])
+def test_svk_patch_uniaxial_and_shear(hyp):
+    mat = Material(**STEEL)
+    lam, mu = lame_parameters(mat, Hypothesis(hyp))
+    up = Patch(mat, "uniaxial", hyp, centre=(0.37, 0.61))
+    for e in (1e-3, 0.05):
+        P = up.step(e)
+        assert rel(P[0], svk_uniaxial(lam, mu, e)) < 1e-8
+    sp = Patch(mat, "shear", hyp, centre=(0.37, 0.61))
+    for g in (1e-3, 0.04):
+        P = sp.step(g)
+        Pa = svk_P(lam, mu, shear_H(g))
+        assert np.linalg.norm(P - Pa[:, 1]) < 1e-8 * np.linalg.norm(Pa[:, 1])
+    # every cell of the patch carries the analytic Cauchy stress
+    F = np.eye(2) + shear_H(0.04)
+    sigma = svk_P(lam, mu, shear_H(0.04)) @ F.T / np.linalg.det(F)
+    cells = sp.model.update_stress().x.array.reshape(-1, 2, 2)
+    assert np.abs(cells - sigma).max() < 1e-8 * np.abs(sigma).max()
+
+
+def neo_hooke_uniaxial(lam, mu, a):
+    """Plane-strain compressible neo-Hookean, uniaxial stress: P11 at stretch a."""
+    p22 = lambda b: mu * (b - 1 / b) + lam * math.log(a * b) / b  # noqa: E731
+    b = brentq(p22, 0.5, 1.5, xtol=1e-15, rtol=1e-15)
+    return mu * (a - 1 / a) + lam * math.log(a * b) / a
+
+
+def test_user_defined_neo_hooke_law_patch():
+    NeoHooke = DEMO["NeoHooke"]
+    mat = NeoHooke(density=1100.0, E=5e6, nu=0.45)
+    lam, mu = lame_parameters(mat, Hypothesis.PLANE_STRAIN)
+    up = Patch(mat, "uniaxial", "plane_strain", centre=(0.44, 0.52))
+    for e in (0.01, 0.3):
+        P = up.step(e)
+        assert rel(P[0], neo_hooke_uniaxial(lam, mu, 1 + e)) < 1e-8
+    sp = Patch(mat, "shear", "plane_strain", centre=(0.44, 0.52))
+    g = 0.25
+    P = sp.step(g)
+    F = np.eye(2) + shear_H(g)
+    Finv_T = np.linalg.inv(F).T
+    Pa = mu * (F - Finv_T) + lam * math.log(np.linalg.det(F)) * Finv_T
+    # the traction (P01, P11) on the top edge; P11 vanishes for this law (J = 1)
+    assert np.linalg.norm(P - Pa[:, 1]) < 1e-8 * np.linalg.norm(Pa[:, 1])
+
+
+# ------------------------------------------------------------------ damage
+DAMAGE = RankineDamage(**STONE, ft=2e6, Gf=60.0)
+
+
+def damage_P(mat, H, kappa_prev, h):
+    """Analytic response of the Rankine damage law at displacement gradient H."""
+    lam, mu = lame_parameters(mat, Hypothesis.PLANE_STRESS)
+    F = np.eye(2) + H
+    E = 0.5 * (H + H.T + H.T @ H)
+    S0 = lam * np.trace(E) * np.eye(2) + 2 * mu * E
+    s1 = max(np.linalg.eigvalsh(S0).max(), 0.0)
+    kappa = max(kappa_prev, s1 / mat.E)
+    e0 = mat.ft / mat.E
+    es = mat.Gf / (mat.ft * h) - 0.5 * e0
+    d = min(max(1 - e0 / kappa * math.exp(-(kappa - e0) / es), 0.0), mat.d_max)
+    return F @ ((1 - d) * S0), kappa
+
+
+@pytest.mark.parametrize("mode", ["uniaxial", "shear"])
+def test_rankine_damage_softening_path(mode):
+    """Single-element test: every node follows the homogeneous path (a softening patch
+    with free nodes would localise), uniaxial stress or simple shear."""
+    p = Patch(DAMAGE, "affine")  # centre node in the middle: four cells, h = L/sqrt(2)
+    h = L / math.sqrt(2.0)
+    lam, mu = lame_parameters(DAMAGE, Hypothesis.PLANE_STRESS)
+    e0 = DAMAGE.eps0
+    kappa = e0
+    worst = 0.0
+    peak = 0.0
+    path = e0 * np.r_[np.linspace(0.2, 1.0, 5), np.linspace(1.2, 10.0, 23)]
+    if mode == "shear":
+        path = path * DAMAGE.E / mu  # the effective principal stress is about μ γ
+    for v in path:
+        if mode == "uniaxial":
+            # uniaxial stress: the lateral effective stress vanishes (damage is isotropic)
+            E11 = v + 0.5 * v * v
+            E22 = -lam / (lam + 2 * mu) * E11
+            H = np.diag([v, math.sqrt(1 + 2 * E22) - 1])
+        else:
+            H = shear_H(v)
+        P = p.affine(H)
+        Pa, kappa = damage_P(DAMAGE, H, kappa, h)
+        peak = max(peak, np.linalg.norm(Pa[:, 0]))
+        worst = max(worst, np.linalg.norm(P - Pa[:, 0]) / peak)
+    final = np.linalg.norm(Pa[:, 0]) / peak
+    print(f"\nRankine damage, {mode}: worst deviation {worst:.2e} of the peak; "
+          f"final/peak {final:.3f}")
+    assert worst < 0.01
+    assert final < 0.25  # the path went well into softening
+
+
+# ------------------------------------------------------------------ plasticity
+MC = MohrCoulomb(**STONE, c=1.0e6, phi=30.0, psi=0.0)
+
+
+def test_mohr_coulomb_shear_plane_strain():
+    p = Patch(MC, "shear", "plane_strain")
+    mu = MC.E / (2 * (1 + MC.nu))
+    g_y = MC.c * math.cos(math.radians(MC.phi)) / mu
+    for g in (0.5 * g_y, 2 * g_y, 5 * g_y):
+        P = p.step(g)
+        tau = min(mu * g, MC.c * math.cos(math.radians(MC.phi)))
+        assert rel(P[0], tau) < 0.01, (g / g_y, P[0], tau)
+
+
+@pytest.mark.parametrize("sign", [-1.0, 1.0])
+def test_mohr_coulomb_uniaxial_plane_stress(sign):
+    p = Patch(MC, "uniaxial", "plane_stress")
+    strength = MC.fc if sign < 0 else MC.ft
+    e_y = strength / MC.E
+    for f in (0.5, 1.5, 4.0):
+        e = sign * f * e_y
+        P = p.step(e)
+        want = (1 + e) * sign * min(MC.E * (e + 0.5 * e * e) * sign, strength)
+        assert rel(P[0], want) < 0.01, (f, P[0], want)
+
+
+def test_drucker_prager_matched_shear_and_uniaxial():
+    dp0 = DruckerPrager(**STONE, c=1.0e6, phi=0.0)
+    p = Patch(dp0, "shear", "plane_strain")
+    mu = dp0.E / (2 * (1 + dp0.nu))
+    P = p.step(4 * dp0.c / mu)
+    assert rel(P[0], dp0.c) < 0.01  # plane-strain fit with φ = 0: √J₂ ≤ c
+    dp = DruckerPrager(**STONE, c=1.0e6, phi=30.0, psi=10.0)
+    eta, xi, _ = dp.cone()
+    # uniaxial compression σ: √J₂ = σ/√3, p = −σ/3 → σ (1/√3 − η/3) = ξ c
+    sigma = xi * dp.c / (1 / math.sqrt(3) - eta / 3)
+    p = Patch(dp, "uniaxial", "plane_stress")
+    e = -3 * sigma / dp.E
+    P = p.step(e)
+    assert rel(P[0], -(1 + e) * sigma) < 0.01
+
+
+def test_perzyna_shear_at_constant_rate():
+    """Von Mises (DP, φ = 0) with Perzyna viscosity η_v sheared at the rate γ̇:
+    τ = c + η_v γ̇ (1 − exp(−μ (t − t_y)/η_v)) after yield at t_y = c/(μ γ̇)."""
+    eta_v = 2.0e6  # [Pa s]
+    mat = DruckerPrager(**STONE, c=1.0e6, phi=0.0, viscosity=eta_v)
+    mu = mat.E / (2 * (1 + mat.nu))
+    rate = 0.5  # [1/s]
+    t_y = mat.c / (mu * rate)
+    tau_rel = eta_v / mu  # relaxation time [s]
+    p = Patch(mat, "shear", "plane_strain")
+    t_end = t_y + 4 * tau_rel
+    n = 400
+    dt = t_end / n
+    worst = 0.0
+    for i in range(1, n + 1):
+        t = i * dt
+        P = p.step(rate * t, dt=dt)
+        want = mu * rate * t if t <= t_y else mat.c + eta_v * rate * (
+            1 - math.exp(-(t - t_y) / tau_rel))
+        worst = max(worst, abs(P[0] - want) / (mat.c + eta_v * rate))
+    print(f"\nPerzyna shear: worst deviation {worst:.2e} of the viscous plateau")
+    assert worst < 0.01
+    # the overstress is real: well above the rate-independent strength at the end
+    assert P[0] > mat.c + 0.9 * eta_v * rate
+
+
+def test_history_committed_only_at_converged_increment():
+    p = Patch(DAMAGE, "uniaxial", centre=(0.45, 0.5))
+    p.step(0.5 * DAMAGE.eps0)
+    kappa0 = p.model.history("kappa").copy()
+    p.dr.max_iter = 3  # this increment cannot converge
+    res = p.dr.solve(0.0, displacement={"drive": (3 * DAMAGE.eps0 * L, None)})
+    assert not res.converged
+    assert np.array_equal(p.model.history("kappa"), kappa0)  # nothing committed
+    p.dr.max_iter = 200_000
+    p.step(3 * DAMAGE.eps0)
+    # committed now: the patch cracked in this increment (localised in one cell)
+    assert p.model.history("kappa").max() > 2.5 * DAMAGE.eps0
