@@ -32,6 +32,7 @@ demo: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/settle_arch.py --out out_settle_arch
 	$(MPIRUN) -n $(NP) $(PY) demos/topple_wall.py --out out_topple_wall
 	$(MPIRUN) -n $(NP) $(PY) demos/shear_wall.py --out out_shear_wall
+	$(MPIRUN) -n $(NP) $(PY) demos/materials.py --out out_materials
 
 test: test-serial test-parallel
 

@@ -50,7 +50,7 @@ class NeoHooke(Material):
 
 
 MATERIALS = {
-    "clay": MohrCoulomb(density=1800.0, E=15e6, nu=0.3, c=20e3, phi=0.0),
+    "clay": MohrCoulomb(density=1800.0, E=500e6, nu=0.3, c=20e3, phi=0.0),
     "concrete": Material(density=2400.0, E=30e9, nu=0.2),
     "rubber": NeoHooke(density=1100.0, E=20e6, nu=0.45),
     "masonry": RankineDamage(density=1900.0, E=3e9, nu=0.2, ft=0.25e6, Gf=20.0),
@@ -63,11 +63,16 @@ def pier_on_clay(h: float = 0.1, comm=MPI.COMM_WORLD):
     from masonry_fdem.geometry import BlockMesh, crossed_grid, graded
 
     half_soil, depth = 3.0 * B, 2.0 * B
+    # refined towards the footing edges, where the plastic zone starts (a singular point)
     n_in = max(2, round(0.5 * B / h))
-    xs = np.r_[graded(0.0, 0.5 * B, n_in), graded(0.5 * B, half_soil, n_in + 2, 4.0)[1:]]
+    inner = graded(0.0, 0.5 * B, n_in, 0.3)
+    edge = inner[-1] - inner[-2]
+    n_out = n_in + 3
+    outer = graded(0.5 * B, half_soil, n_out, (half_soil - 0.5 * B) / n_out / edge * 2)
+    xs = np.r_[inner, outer[1:]]
     xs = np.r_[-xs[:0:-1], xs]
     # layers: soil, footing 0.3 m, pad 0.05 m, pier 1.0 m
-    ys = np.r_[graded(-depth, 0.0, round(depth / h) + 2, 0.25), [0.15, 0.3, 0.35],
+    ys = np.r_[graded(-depth, 0.0, round(depth / h) + 2, 0.15), [0.15, 0.3, 0.35],
                np.linspace(0.35, 1.35, round(1.0 / h) + 1)[1:]]
     x, cells = crossed_grid(xs, ys)
     c = x[cells].mean(axis=1)
@@ -91,7 +96,7 @@ def pier_on_clay(h: float = 0.1, comm=MPI.COMM_WORLD):
     return model
 
 
-def push(model, settlement: float = 0.06, steps: int = 24, callback=None):
+def push(model, settlement: float = 0.0015, steps: int = 12, callback=None):
     """Settlement [m] of the pier top by dynamic relaxation; (settlement, load [N]) arrays."""
     from masonry_fdem.solvers import DynamicRelaxation
 
@@ -111,7 +116,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out_materials")
     ap.add_argument("--h", type=float, default=0.1, help="mesh size under the footing [m]")
-    ap.add_argument("--steps", type=int, default=24)
+    ap.add_argument("--steps", type=int, default=12)
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
     out = Path(args.out)

@@ -165,7 +165,9 @@ class Model:
         self.dx = ufl.Measure("dx", domain=mesh, subdomain_data=mat_ids)
         self.ds = ufl.Measure("ds", domain=mesh)
         # the constitutive laws: one quadrature point per P1 cell (∇u is constant there)
-        self.qstate = QuadratureState(mesh, self.dmesh.cell_material, QUADRATURE_DEGREE)
+        self.qstate = QuadratureState(
+            mesh, self.dmesh.cell_material, QUADRATURE_DEGREE,
+            p1=(np.ascontiguousarray(self.X), self.u.x.array, self.cell_nodes))
         dxq = ufl.Measure("dx", domain=mesh, subdomain_data=mat_ids,
                           metadata=self.qstate.metadata)
         u = self.u
@@ -541,6 +543,30 @@ class Model:
         if not qs.has_return_mapping:
             raise ValueError("no material of this model has a return mapping")
         return qs.s0[qs.qdofs].mean(axis=1)
+
+    def material_fields(self) -> dict[str, np.ndarray]:
+        """Committed material state per local cell for output: each history variable
+        (e.g. "kappa"), what the laws derive from it (e.g. "damage"), and for
+        return-mapping laws "plastic_strain" (α) and "plastic_work_density" [J/m³].
+        Cells of materials without a field hold 0."""
+        out: dict[str, np.ndarray] = {}
+        names = sorted({n for k in self.law_context.values() for n in k.state})
+        h = np.sqrt(2.0 * np.abs(self.blocks.cell_area[self.dmesh.cell_input]))
+        for n in names:
+            out[n] = np.nan_to_num(self.history(n))
+        for mid, name in enumerate(self.blocks.material_names):
+            mat = self.materials[name]
+            k = self.law_context[mid]
+            if k.state:
+                cells = self.qstate.cells(mid)
+                hist = {n: out[n][cells] for n in k.state}
+                for fname, vals in mat.output_fields(hist, h[cells]).items():
+                    out.setdefault(fname, np.zeros(self.qstate.n_cells))[cells] = vals
+        if self.qstate.has_return_mapping:
+            st = self.plastic_state()
+            out["plastic_strain"] = st[:, 4].copy()
+            out["plastic_work_density"] = st[:, 6].copy()
+        return out
 
     def plastic_work(self) -> float:
         """Plastic work ∫ σ:dεᵖ w dX [J] dissipated so far (collective)."""

@@ -23,8 +23,11 @@ def precompile() -> None:
     mask = np.zeros(n, dtype=np.int8)
     K.gather(u, np.zeros(n, dtype=np.int64), v)
     K.gather_to(u, np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), v)
-    from masonry_fdem.materials.quadrature import scatter_rows
+    from masonry_fdem.materials.quadrature import p1_gradients, scatter_rows
 
+    p1_gradients(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), np.zeros(6),
+                 np.array([[0, 1, 2]], dtype=np.int64), np.zeros(1, dtype=np.int32),
+                 np.zeros(1, dtype=np.int64), np.zeros((1, 4)))
     scatter_rows(np.zeros((2, 3)), np.zeros(2, dtype=np.int64), np.zeros((3, 3)))
     K.central_difference_step(u, v, f, f, f, m, m, mask, v, 0.0, 1e-3, f.copy(),
                               np.zeros(K.N_ENERGY))

@@ -110,3 +110,17 @@ def test_cli_info_and_settle(shared_tmp, capsys):
     err = capsys.readouterr().err
     if comm.rank == 0:
         assert "missing.msh" in err
+
+
+def test_materials_demo_small(shared_tmp, monkeypatch, capsys):
+    out = shared_tmp / "materials"
+    monkeypatch.setattr(sys, "argv", ["materials.py", "--h", "0.25", "--steps", "2",
+                                      "--out", str(out)])
+    runpy.run_path(str(ROOT / "demos" / "materials.py"), run_name="__main__")
+    text = capsys.readouterr().out
+    if comm.rank == 0:
+        line = [x for x in text.splitlines() if x.startswith("final load")][0]
+        assert float(line.split()[2]) > 0
+        assert (out / "load_settlement.png").exists() and (out / "history.csv").exists()
+        for name in ("displacement.bp", "stress.bp", "materials.bp"):
+            assert (out / name).is_dir() and any((out / name).iterdir())

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import ufl
 from scipy.optimize import brentq
 
 from masonry_fdem import Material
@@ -221,3 +222,53 @@ def test_history_committed_only_at_converged_increment():
     p.step(3 * DAMAGE.eps0)
     # committed now: the patch cracked in this increment (localised in one cell)
     assert p.model.history("kappa").max() > 2.5 * DAMAGE.eps0
+
+
+def test_explicit_solver_commits_the_plastic_state_every_step():
+    """The patch sheared slowly by the explicit solver (plane strain, Mohr–Coulomb):
+    the shear traction levels off at c cos φ as under dynamic relaxation."""
+    from masonry_fdem import Model
+    from masonry_fdem.solvers import ExplicitSolver
+    from material_patch import W, near, patch_mesh
+
+    m = Model(patch_mesh((0.4, 0.55)), {"m": MC}, hypothesis="plane_strain", width=W)
+    mu = MC.E / (2 * (1 + MC.nu))
+    tau_y = MC.c * math.cos(math.radians(MC.phi))
+    g_end = 5 * tau_y / mu
+    t_end = 4e-3  # ≈ 100 periods of the patch's lowest mode: quasi-static
+    v = g_end * L / t_end
+    m.fix(lambda X: near(X[1], 0.0), name="bottom")
+    m.prescribe_nodes(lambda X: near(X[1], L), (v, 0.0), name="drive")
+    s = ExplicitSolver(m, damping=5e3)
+    s.run(t_end=t_end)
+    # the stress in the cells (the reaction of the driven nodes also carries their
+    # damping force)
+    tau = m.update_stress().x.array.reshape(-1, 2, 2)[:, 0, 1]
+    print(f"\nexplicit MC shear: tau = {np.array2string(tau, precision=6)} Pa, "
+          f"c cos(phi) = {tau_y:.6g} Pa")
+    assert np.all(np.abs(tau / tau_y - 1.0) < 0.01)
+    assert np.all(m.plastic_state()[:, 4] > 0)  # α committed in every cell
+
+
+def test_bad_material_input_is_refused_with_a_clear_message():
+    with pytest.raises(ValueError, match="ft must be"):
+        RankineDamage(**STONE, ft=-1.0, Gf=60.0)
+    with pytest.raises(ValueError, match="dilatancy angle"):
+        MohrCoulomb(**STONE, c=1e6, phi=20.0, psi=30.0)
+    with pytest.raises(ValueError, match="no strength"):
+        MohrCoulomb(**STONE, c=0.0, phi=0.0)
+    with pytest.raises(ValueError, match="fit must be"):
+        DruckerPrager(**STONE, c=1e6, phi=20.0, fit="middle")
+    with pytest.raises(ValueError, match="viscosity"):
+        DruckerPrager(**STONE, c=1e6, phi=20.0, viscosity=-1.0)
+    # a softening law on elements too large for its fracture energy (snap-back)
+    brittle = RankineDamage(**STONE, ft=5e6, Gf=1.0)  # 2 E Gf / ft^2 = 1.6 mm
+    with pytest.raises(ValueError, match="snaps back"):
+        Patch(brittle, "uniaxial")
+
+    class Broken(Material):
+        def first_piola(self, k):
+            return ufl.tr(k.E)  # a scalar, not a stress
+
+    with pytest.raises(ValueError, match="2x2 UFL tensor"):
+        Patch(Broken(**STONE), "uniaxial")

@@ -4,7 +4,9 @@ Two time series in the run folder: ``displacement.bp`` (nodal displacement and v
 P1) and ``stress.bp`` (Cauchy stress per cell, DG0); with bonded joints a third,
 ``joints.bp``: the worst joint state along each cell's edges (DG0; 0 intact, 1 softening,
 2 open, 3 sliding, 4 crushed, see :data:`masonry_fdem.contact.JOINT_STATES`). Open them in ParaView with the ADIOS2
-VTX reader and apply "Warp By Vector" on the displacement.
+VTX reader and apply "Warp By Vector" on the displacement. Models with history or plastic
+laws also get ``materials.bp`` (DG0): history variables such as "kappa", the "damage",
+"plastic_strain" (accumulated α) and "plastic_work_density" [J/m³].
 """
 
 from __future__ import annotations
@@ -42,6 +44,15 @@ class VTXOutput:
         self._cell = dolfinx.io.VTXWriter(
             model.comm, self.folder / "stress.bp", [model.stress], engine="BP4"
         )
+        # material state (damage, plastic strain), DG0
+        self._mat = None
+        fields = model.material_fields()
+        if fields:
+            Q = dolfinx.fem.functionspace(model.mesh, ("DG", 0))
+            self.material = {n: dolfinx.fem.Function(Q, name=n) for n in fields}
+            self._mat = dolfinx.io.VTXWriter(
+                model.comm, self.folder / "materials.bp", list(self.material.values()),
+                engine="BP4")
         self._joint = None
         if joints is not None:
             Q = dolfinx.fem.functionspace(model.mesh, ("DG", 0))
@@ -58,6 +69,12 @@ class VTXOutput:
         self.model.update_stress()
         self._nodal.write(t)
         self._cell.write(t)
+        if self._mat is not None:
+            for n, vals in self.model.material_fields().items():
+                f = self.material[n]
+                f.x.array[: vals.size] = vals
+                f.x.scatter_forward()
+            self._mat.write(t)
         if self._joint is not None:
             state = self.joints.cell_state()
             cells = self.model.dmesh.cell_input
@@ -68,6 +85,8 @@ class VTXOutput:
     def close(self) -> None:
         self._nodal.close()
         self._cell.close()
+        if self._mat is not None:
+            self._mat.close()
         if self._joint is not None:
             self._joint.close()
 

@@ -112,37 +112,22 @@ def finite_plastic_update(grad, state0, state1, stress, energy, qps, prm, dt):
             ezz_prev = 0.0
         sxx, syy, sxy, szz, nxx, nyy, nzz, nxy, a1, ezz = _point_update(
             exx, eyy, exy, ezz_prev, 0.0, 0.0, pzz0, 0.0, state0[q, S_ALPHA], prm, dt)
-        # new elastic Hencky strain G and bᵉ − I = exp(2G) − I
-        gxx = exx - nxx
-        gyy = eyy - nyy
-        gxy = exy - nxy
-        gzz = ezz - nzz
-        bxx, byy, bxy = _sym_fun(gxx, gyy, gxy, 1)
         det = f00 * f11 - f01 * f10
         i00 = f11 / det
         i01 = -f01 / det
         i10 = -f10 / det
         i11 = f00 / det
-        # D = F⁻¹ (bᵉ − I) F⁻ᵀ + (C⁻¹ − I),  C⁻¹ − I = −C⁻¹ (H + Hᵀ + HᵀH)
-        u00 = i00 * bxx + i01 * bxy
-        u01 = i00 * bxy + i01 * byy
-        u10 = i10 * bxx + i11 * bxy
-        u11 = i10 * bxy + i11 * byy
-        e00 = 2.0 * h00 + h00 * h00 + h10 * h10  # 2E = H + Hᵀ + HᵀH
-        e11 = 2.0 * h11 + h01 * h01 + h11 * h11
-        e01 = h01 + h10 + h00 * h01 + h10 * h11
-        c00 = i00 * i00 + i01 * i01  # C⁻¹ = F⁻¹ F⁻ᵀ
-        c11 = i10 * i10 + i11 * i11
-        c01 = i00 * i10 + i01 * i11
-        state1[q, C_XX] = u00 * i00 + u01 * i01 - (c00 * e00 + c01 * e01)
-        state1[q, C_YY] = u10 * i10 + u11 * i11 - (c01 * e01 + c11 * e11)
-        state1[q, C_XY] = u00 * i10 + u01 * i11 - (c00 * e01 + c01 * e11)
-        state1[q, C_ZZ] = 0.0 if plane_stress else math.expm1(2.0 * gzz)
-        state1[q, S_ALPHA] = a1
-        state1[q, S_EZZ] = ezz
-        dpzz = nzz - pzz0
-        state1[q, S_WP] = state0[q, S_WP] + (
-            sxx * nxx + syy * nyy + szz * dpzz + 2.0 * sxy * nxy)
+        if nxx == 0.0 and nyy == 0.0 and nxy == 0.0 and nzz == pzz0:
+            # elastic: the plastic metric stays
+            for j in range(N_STATE):
+                state1[q, j] = state0[q, j]
+            state1[q, S_EZZ] = ezz
+            gzz = ezz - nzz
+            energy[q] = 0.5 * (sxx * exx + syy * eyy + szz * gzz + 2.0 * sxy * exy)
+        else:
+            _plastic_state(state0, state1, q, exx, eyy, exy, ezz, nxx, nyy, nzz, nxy, pzz0,
+                           a1, sxx, syy, sxy, szz, h00, h01, h10, h11, i00, i01, i10, i11,
+                           energy, plane_stress)
         v00 = i00 * sxx + i01 * sxy
         v01 = i00 * sxy + i01 * syy
         v10 = i10 * sxx + i11 * sxy
@@ -151,4 +136,37 @@ def finite_plastic_update(grad, state0, state1, stress, energy, qps, prm, dt):
         stress[q, 1] = v10 * i10 + v11 * i11
         stress[q, 2] = v00 * i10 + v01 * i11
         stress[q, 3] = szz
-        energy[q] = 0.5 * (sxx * gxx + syy * gyy + szz * gzz + 2.0 * sxy * gxy)
+
+
+@njit(cache=True)
+def _plastic_state(state0, state1, q, exx, eyy, exy, ezz, nxx, nyy, nzz, nxy, pzz0, a1, sxx,
+                   syy, sxy, szz, h00, h01, h10, h11, i00, i01, i10, i11, energy,
+                   plane_stress):
+    """Trial state after a plastic return: Cᵖ⁻¹ from the new elastic strain, α, work."""
+    # new elastic Hencky strain G and bᵉ − I = exp(2G) − I
+    gxx = exx - nxx
+    gyy = eyy - nyy
+    gxy = exy - nxy
+    gzz = ezz - nzz
+    bxx, byy, bxy = _sym_fun(gxx, gyy, gxy, 1)
+    # D = F⁻¹ (bᵉ − I) F⁻ᵀ + (C⁻¹ − I),  C⁻¹ − I = −C⁻¹ (H + Hᵀ + HᵀH)
+    u00 = i00 * bxx + i01 * bxy
+    u01 = i00 * bxy + i01 * byy
+    u10 = i10 * bxx + i11 * bxy
+    u11 = i10 * bxy + i11 * byy
+    e00 = 2.0 * h00 + h00 * h00 + h10 * h10  # 2E = H + Hᵀ + HᵀH
+    e11 = 2.0 * h11 + h01 * h01 + h11 * h11
+    e01 = h01 + h10 + h00 * h01 + h10 * h11
+    c00 = i00 * i00 + i01 * i01  # C⁻¹ = F⁻¹ F⁻ᵀ
+    c11 = i10 * i10 + i11 * i11
+    c01 = i00 * i10 + i01 * i11
+    state1[q, C_XX] = u00 * i00 + u01 * i01 - (c00 * e00 + c01 * e01)
+    state1[q, C_YY] = u10 * i10 + u11 * i11 - (c01 * e01 + c11 * e11)
+    state1[q, C_XY] = u00 * i10 + u01 * i11 - (c00 * e01 + c01 * e11)
+    state1[q, C_ZZ] = 0.0 if plane_stress else math.expm1(2.0 * gzz)
+    state1[q, S_ALPHA] = a1
+    state1[q, S_EZZ] = ezz
+    dpzz = nzz - pzz0
+    state1[q, S_WP] = state0[q, S_WP] + (
+        sxx * nxx + syy * nyy + szz * dpzz + 2.0 * sxy * nxy)
+    energy[q] = 0.5 * (sxx * gxx + syy * gyy + szz * gzz + 2.0 * sxy * gxy)

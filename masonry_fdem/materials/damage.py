@@ -97,6 +97,14 @@ class RankineDamage(Material):
         d = 1.0 - e0 / kappa * ufl.exp(-(kappa - e0) / es)
         return ufl.min_value(ufl.max_value(d, 0.0), self.d_max)
 
+    def output_fields(self, history: dict, h) -> dict:
+        import numpy as np
+
+        kappa = np.maximum(history["kappa"], self.eps0)
+        es = self.Gf / (self.ft * h) - 0.5 * self.eps0
+        d = 1.0 - self.eps0 / kappa * np.exp(-(kappa - self.eps0) / es)
+        return {"damage": np.clip(d, 0.0, self.d_max)}
+
     def second_piola(self, k):
         return (1.0 - self.damage(k)) * self.effective_stress(k)
 

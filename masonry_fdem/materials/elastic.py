@@ -93,6 +93,11 @@ class Material:
         """The value each history variable takes if the current state is accepted (UFL)."""
         return {}
 
+    def output_fields(self, history: dict, h) -> dict:
+        """Fields derived from the committed history arrays (per cell of size ``h`` [m])
+        for output, e.g. the damage; numpy in, numpy out."""
+        return {}
+
     def check_mesh(self, h_max: float, hypothesis: Hypothesis) -> None:
         """Raise ValueError if the law cannot be used with elements of size up to
         ``h_max`` [m] (a softening law that would snap back)."""

@@ -44,11 +44,39 @@ def scatter_rows(src, rows, dst):
             dst[r, j] = src[i, j]
 
 
+@njit(cache=True)
+def p1_gradients(X, u, cell_nodes, cells, rows, out):
+    """Displacement gradient H = ∇u (H00, H01, H10, H11) of P1 triangles ``cells`` into
+    ``out[rows]`` (constant on a cell: its single quadrature point)."""
+    for k in range(cells.size):
+        c = cells[k]
+        a = cell_nodes[c, 0]
+        b = cell_nodes[c, 1]
+        d = cell_nodes[c, 2]
+        x1 = X[b, 0] - X[a, 0]
+        y1 = X[b, 1] - X[a, 1]
+        x2 = X[d, 0] - X[a, 0]
+        y2 = X[d, 1] - X[a, 1]
+        det = x1 * y2 - x2 * y1
+        ux1 = u[2 * b] - u[2 * a]
+        uy1 = u[2 * b + 1] - u[2 * a + 1]
+        ux2 = u[2 * d] - u[2 * a]
+        uy2 = u[2 * d + 1] - u[2 * a + 1]
+        # [du/dx, du/dy] = [Δu1, Δu2] J⁻¹ with J = [[x1, x2], [y1, y2]]
+        r = rows[k]
+        out[r, 0] = (ux1 * y2 - ux2 * y1) / det
+        out[r, 1] = (ux2 * x1 - ux1 * x2) / det
+        out[r, 2] = (uy1 * y2 - uy2 * y1) / det
+        out[r, 3] = (uy2 * x1 - uy1 * x2) / det
+
+
 class QuadratureState:
     """History and return-mapping state of the materials of one model (see module doc)."""
 
-    def __init__(self, mesh, cell_material: np.ndarray, degree: int):
+    def __init__(self, mesh, cell_material: np.ndarray, degree: int, p1=None):
         self.mesh = mesh
+        #: (X (n, 2), u array, cell_nodes (nc, 3)) of a P1 model: gradients by numba
+        self.p1 = p1
         self.degree = int(degree)
         cell = mesh.basix_cell()
         self.Q = dolfinx.fem.functionspace(
@@ -135,8 +163,12 @@ class QuadratureState:
         if not self._rm:
             return
         if self.rm_cells.size:
-            self._strain_expr.eval(self.mesh, self.rm_cells, values=self._strain_buf)
-            scatter_rows(self._strain_buf.reshape(-1, 4), self.rm_rows, self.strain)
+            if self.p1 is not None and self.nqp == 1:
+                X, u, cell_nodes = self.p1
+                p1_gradients(X, u, cell_nodes, self.rm_cells, self.rm_rows, self.strain)
+            else:
+                self._strain_expr.eval(self.mesh, self.rm_cells, values=self._strain_buf)
+                scatter_rows(self._strain_buf.reshape(-1, 4), self.rm_rows, self.strain)
         for material, prm, qps in self._rm:
             material.return_map(self.strain, self.s0, self.s1, self.stress, self.energy, qps,
                                 prm, self.t_rate)
