@@ -58,7 +58,7 @@ def main() -> None:
             samples[k].append((time.perf_counter() - t0) / reps)
     med = [statistics.median(s) for s in samples]
     print(f"{blocks.n_cells} cells, {args.hypothesis}; internal force, median of 9 rounds")
-    for (name, m), t in zip(models.items(), med):
+    for (name, m), t in zip(models.items(), med, strict=True):
         plastic = ""
         if m.qstate.has_return_mapping:
             frac = float(np.mean(m.qstate.s1[:, 4] > 0))

@@ -32,15 +32,7 @@ import ufl
 from dolfinx import cpp as _cpp
 
 from masonry_fdem.constants import G
-from masonry_fdem.materials import (
-    Hypothesis,
-    Material,
-    cauchy_stress,
-    green_lagrange,
-    lame_parameters,
-    svk_energy_density,
-    svk_second_piola,
-)
+from masonry_fdem.materials import Hypothesis, Material, green_lagrange, lame_parameters
 from masonry_fdem.materials.base import LawContext
 from masonry_fdem.materials.plasticity import ReturnMapping
 from masonry_fdem.materials.quadrature import QuadratureState
@@ -236,7 +228,7 @@ class Model:
             f.x.array[:] = offsets[-1] + np.arange(n, dtype=np.float64)
             offsets.append(offsets[-1] + n)
         probe = dolfinx.fem.pack_coefficients(self.f_int_form)
-        for f, a in zip(functions, saved):
+        for f, a in zip(functions, saved, strict=True):
             f.x.array[:] = a
         offsets = np.asarray(offsets)
         self._gather = []

@@ -71,8 +71,8 @@ def precompile() -> None:
     J.interface_law(props[0], 2.0, 1.0, s0[0], s1[0])
     J.interface_law(props[0], -2.0, 0.5, s0[0], s1[0])
 
+    from masonry_fdem.materials import DruckerPrager, MohrCoulomb
     from masonry_fdem.materials import _plastic_kernels as PK
-    from masonry_fdem.materials import MohrCoulomb, DruckerPrager
 
     strain = np.array([[1e-3, -2e-3, 5e-4], [1e-3, -2e-3, 5e-4]])
     qps = np.arange(2, dtype=np.int64)

@@ -11,17 +11,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 import ufl
+from material_patch import L, Patch, svk_uniaxial
 from scipy.optimize import brentq
 
 from masonry_fdem import Material
 from masonry_fdem.materials import (
     DruckerPrager,
+    Hypothesis,
     MohrCoulomb,
     RankineDamage,
     lame_parameters,
 )
-from masonry_fdem.materials import Hypothesis
-from material_patch import L, Patch, svk_uniaxial
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = runpy.run_path(str(ROOT / "demos" / "materials.py"), run_name="materials_lib")
@@ -227,9 +227,10 @@ def test_history_committed_only_at_converged_increment():
 def test_explicit_solver_commits_the_plastic_state_every_step():
     """The patch sheared slowly by the explicit solver (plane strain, Mohr–Coulomb):
     the shear traction levels off at c cos φ as under dynamic relaxation."""
+    from material_patch import W, near, patch_mesh
+
     from masonry_fdem import Model
     from masonry_fdem.solvers import ExplicitSolver
-    from material_patch import W, near, patch_mesh
 
     m = Model(patch_mesh((0.4, 0.55)), {"m": MC}, hypothesis="plane_strain", width=W)
     mu = MC.E / (2 * (1 + MC.nu))

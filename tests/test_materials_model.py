@@ -89,7 +89,7 @@ def test_same_material_response_on_any_number_of_ranks():
     world = _run(MPI.COMM_WORLD)
     alone = _run(MPI.COMM_SELF)
     worst = 0.0
-    for (uw, rw, pw, ew), (us, rs, ps, es) in zip(world, alone):
+    for (uw, rw, pw, ew), (us, rs, ps, es) in zip(world, alone, strict=True):
         worst = max(worst, np.abs(uw - us).max() / np.abs(us).max(),
                     np.abs(rw - rs).max() / np.abs(rs).max(), abs(pw - ps) / ps,
                     abs(ew - es) / es)

@@ -25,7 +25,12 @@ from dataclasses import dataclass
 
 import ufl
 
-from masonry_fdem.materials.elastic import Hypothesis, Material, svk_energy_density, svk_second_piola
+from masonry_fdem.materials.elastic import (
+    Hypothesis,
+    Material,
+    svk_energy_density,
+    svk_second_piola,
+)
 
 __all__ = ["RankineDamage"]
 
@@ -51,7 +56,8 @@ class RankineDamage(Material):
         for name in ("ft", "Gf"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ValueError(f"RankineDamage: {name} must be a finite number > 0, got {value!r}")
+                raise ValueError(
+                    f"RankineDamage: {name} must be a finite number > 0, got {value!r}")
             object.__setattr__(self, name, float(value))
         if not 0.0 < self.d_max <= 1.0:
             raise ValueError(f"RankineDamage: d_max must lie in (0, 1], got {self.d_max}")
