@@ -210,6 +210,32 @@ def test_perzyna_shear_at_constant_rate():
     assert P[0] > mat.c + 0.9 * eta_v * rate
 
 
+def test_perzyna_uniaxial_stress_at_constant_rate():
+    """Von Mises (DP, φ = 0: √J₂ ≤ c) with Perzyna viscosity, pulled in uniaxial stress
+    (plane stress) at the strain rate ε̇: σ̇ = E ε̇ − E (σ − √3 c)/(3 η_v) gives
+    σ = √3 c + 3 η_v ε̇ (1 − exp(−E (t − t_y)/(3 η_v))) after t_y = √3 c/(E ε̇)."""
+    eta_v = 2.0e6  # [Pa s]
+    mat = DruckerPrager(**STONE, c=1.0e6, phi=0.0, viscosity=eta_v)
+    rate = 0.5  # [1/s]
+    s_y = math.sqrt(3.0) * mat.c
+    t_y = s_y / (mat.E * rate)
+    tau_rel = 3.0 * eta_v / mat.E
+    p = Patch(mat, "uniaxial", "plane_stress")
+    n = 600
+    dt = (t_y + 4 * tau_rel) / n
+    worst = 0.0
+    for i in range(1, n + 1):
+        t = i * dt
+        e = rate * t
+        P = p.step(e, dt=dt)
+        sigma = mat.E * e if t <= t_y else s_y + 3 * eta_v * rate * (
+            1 - math.exp(-(t - t_y) / tau_rel))
+        worst = max(worst, abs(P[0] - sigma) / (s_y + 3 * eta_v * rate))
+    print(f"\nPerzyna uniaxial: worst deviation {worst:.2e} of the viscous plateau")
+    assert worst < 0.01
+    assert P[0] > s_y + 0.9 * 3 * eta_v * rate
+
+
 def test_history_committed_only_at_converged_increment():
     p = Patch(DAMAGE, "uniaxial", centre=(0.45, 0.5))
     p.step(0.5 * DAMAGE.eps0)
