@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 import runpy
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -88,6 +89,38 @@ def test_user_defined_neo_hooke_law_patch():
     Finv_T = np.linalg.inv(F).T
     Pa = mu * (F - Finv_T) + lam * math.log(np.linalg.det(F)) * Finv_T
     # the traction (P01, P11) on the top edge; P11 vanishes for this law (J = 1)
+    assert np.linalg.norm(P - Pa[:, 1]) < 1e-8 * np.linalg.norm(Pa[:, 1])
+
+
+@dataclass(frozen=True)
+class Orthotropic(Material):
+    """A user law on the Green–Lagrange strain: orthotropic St. Venant–Kirchhoff in plane
+    stress (homogenised masonry), E = E_x ≥ E_y, nu = ν_xy."""
+
+    Ey: float = 1.0
+    Gxy: float = 1.0
+
+    def second_piola(self, k):
+        d = 1.0 - self.nu**2 * self.Ey / self.E
+        q11, q22, q12 = self.E / d, self.Ey / d, self.nu * self.Ey / d
+        e = k.E
+        return ufl.as_matrix([[q11 * e[0, 0] + q12 * e[1, 1], 2 * self.Gxy * e[0, 1]],
+                              [2 * self.Gxy * e[0, 1], q12 * e[0, 0] + q22 * e[1, 1]]])
+
+
+def test_user_defined_orthotropic_law_on_green_lagrange_strain():
+    mat = Orthotropic(density=1800.0, E=6e9, nu=0.15, Ey=3e9, Gxy=1.5e9)
+    up = Patch(mat, "uniaxial", centre=(0.4, 0.6))
+    for e in (1e-3, 0.03):
+        P = up.step(e)  # S_yy = 0 makes S_xx = E_x E_xx whatever E_y
+        assert rel(P[0], (1 + e) * mat.E * (e + 0.5 * e * e)) < 1e-8
+    sp = Patch(mat, "shear", centre=(0.4, 0.6))
+    g = 0.02
+    P = sp.step(g)
+    d = 1.0 - mat.nu**2 * mat.Ey / mat.E
+    S = np.array([[mat.nu * mat.Ey / d * g * g / 2, mat.Gxy * g],
+                  [mat.Gxy * g, mat.Ey / d * g * g / 2]])
+    Pa = (np.eye(2) + shear_H(g)) @ S
     assert np.linalg.norm(P - Pa[:, 1]) < 1e-8 * np.linalg.norm(Pa[:, 1])
 
 
@@ -286,6 +319,11 @@ def test_bad_material_input_is_refused_with_a_clear_message():
         MohrCoulomb(**STONE, c=0.0, phi=0.0)
     with pytest.raises(ValueError, match="fit must be"):
         DruckerPrager(**STONE, c=1e6, phi=20.0, fit="middle")
+    brick = MohrCoulomb.from_strengths(**STONE, fc=12e6, ft=1.2e6)
+    assert brick.fc == pytest.approx(12e6, rel=1e-12) and brick.ft == pytest.approx(1.2e6,
+                                                                                  rel=1e-12)
+    with pytest.raises(ValueError, match="0 < ft <= fc"):
+        MohrCoulomb.from_strengths(**STONE, fc=1e6, ft=2e6)
     with pytest.raises(ValueError, match="viscosity"):
         DruckerPrager(**STONE, c=1e6, phi=20.0, viscosity=-1.0)
     # a softening law on elements too large for its fracture energy (snap-back)
