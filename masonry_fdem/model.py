@@ -629,7 +629,8 @@ class Model:
         node_fixed = (mask[0::2] == 1) & (mask[1::2] == 1)
         omega2[np.all(node_fixed[self.cell_nodes], axis=1)] = 0.0
         w2 = self.comm.allreduce(float(omega2.max()) if omega2.size else 0.0, op=MPI.MAX)
-        return 2.0 / np.sqrt(w2 + extra_omega2)
+        total = w2 + extra_omega2
+        return 2.0 / np.sqrt(total) if total > 0 else np.inf
 
     # ------------------------------------------------------------------ results
     def gather_nodal(self, values: np.ndarray) -> np.ndarray:

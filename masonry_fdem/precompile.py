@@ -7,6 +7,7 @@ parallel run load the cache instead of racing to write it.
 from __future__ import annotations
 
 import numpy as np
+from mpi4py import MPI
 
 __all__ = ["precompile"]
 
@@ -85,6 +86,18 @@ def precompile() -> None:
             law.return_map(np.zeros((2, 4)) + 1e-3, s0, s0.copy(), np.zeros((2, 4)),
                            np.zeros(2), qps, law.kernel_params(hyp), 1e-3)
     PK.yield_value(np.zeros(4), 0.0, law.kernel_params("plane_strain"))
+
+    from masonry_fdem.contact import _disk_kernels as DK
+    from masonry_fdem.disks import DiskMaterial, Disks
+
+    dm = DiskMaterial(density=1.0, E=1e6, nu=0.2, rolling_friction=0.1)
+    dd = Disks(np.array([[0.0, 0.0], [1.9, 0.0], [9.0, 9.0]]), np.ones(3), {"d": dm}, "d",
+               comm=MPI.COMM_SELF)
+    dd.add_gravity()
+    dd.compute_forces(1e-3)
+    dd.advance(1e-3, 0.1)
+    DK.brute_force_disk_pairs(dd.x, dd.r, 0.1)
+    DK.hertz_force(1.0, 0.5, 0.1, 0.2)
 
     from masonry_fdem.contact.adt import brute_force_pairs, query_adt, self_pairs
 

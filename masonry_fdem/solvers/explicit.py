@@ -66,6 +66,8 @@ class ExplicitSolver:
         contact: a :class:`~masonry_fdem.contact.BlockContact`, the bonded
             :class:`~masonry_fdem.contact.Joints`, a sequence of them, or None (blocks do not
             interact). Their springs are included in the stable time step.
+        disks: a :class:`~masonry_fdem.disks.Disks` set (granular fill) advanced by the same
+            step, with its couplings to the blocks; its contact springs bound the step too.
 
     Raises:
         UnstableTimeStepError: ``dt`` exceeds the critical time step.
@@ -80,13 +82,18 @@ class ExplicitSolver:
         damping: float = 0.0,
         load_factor: float | Callable[[float], float] = 1.0,
         contact=None,
+        disks=None,
     ):
         self.model = model
         self.contact = contact
         self.interactions = as_interactions(contact)
+        self.disks = disks
         self.dt_critical = model.stable_time_step(
             extra_omega2=sum(c.stable_omega2() for c in self.interactions)
         )
+        if disks is not None:
+            w2 = disks.stable_omega2() + sum(c.stable_omega2() for c in disks.couplings)
+            self.dt_critical = min(self.dt_critical, 2.0 / np.sqrt(w2))
         if dt is None:
             if not 0 < safety <= 1:
                 raise ValueError(f"time-step safety factor must be in (0, 1], got {safety}")
@@ -139,11 +146,21 @@ class ExplicitSolver:
                 c.add_forces(self.f_con, m.v, self.dt)
                 if hasattr(c, "commit"):
                     c.commit()
+        d = self.disks
+        if d is not None:
+            d.compute_forces(self.dt)
+            if d.couplings:
+                if not self.interactions:
+                    self.f_con.fill(0.0)
+                for c in d.couplings:
+                    c.add_forces(self.f_con, m.v, self.dt)
         m.commit_state()
         K.central_difference_step(
             m.u.x.array, m.v, m.f_int, self.f_ext, self.f_con, m.mass, m.minv, self.presc,
             self.vp, self.damping, self.dt, self.reaction, self.energy,
         )
+        if d is not None:
+            d.advance(self.dt, self.damping)
         self.t += self.dt
         self.n += 1
 

@@ -1,0 +1,346 @@
+"""Rigid circular discrete elements (disks) for granular fill.
+
+A :class:`Disks` set holds, per disk, the centre x (n, 2) [m], rotation θ [rad], velocity
+v (n, 2) [m/s] and angular velocity ω [rad/s] (both at half steps, as the blocks'), radius
+r [m], mass m = ρ π r² w [kg] and rotational inertia I = m r²/2 [kg m²] for the
+out-of-plane thickness w [m] of the model. Disks are advanced by the same central-difference
+step as the blocks (:class:`~masonry_fdem.solvers.ExplicitSolver` with ``disks=``).
+
+Disk–disk contact is Hertz–Mindlin–Coulomb with hysteretic restitution and optional rolling
+resistance (:mod:`masonry_fdem.contact._disk_kernels`, where the 2D law is stated and
+justified). Candidate pairs come from a cell list (disks are nearly monodisperse within a
+factor of a few, which a uniform grid serves best), rebuilt when a disk has moved by half
+the margin since the last rebuild; the tangential and rolling histories of persisting
+pairs are carried over.
+
+Parallel runs: every rank holds every disk and computes the disk–disk forces of all of
+them identically (the disk state stays replicated, nothing is exchanged); block couplings
+are computed by the rank owning the block and summed over ranks.
+
+Units are SI throughout.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+from numba import njit
+
+from masonry_fdem.constants import G
+from masonry_fdem.contact import _disk_kernels as DK
+
+__all__ = ["DiskMaterial", "Disks"]
+
+# energy account of the disks (entries of Disks.energy)
+D_KINETIC = 0  # kinetic energy at the half step [J]
+D_GRAVITY = 1  # work done by gravity [J]
+D_DAMPING = 2  # dissipated by mass-proportional damping [J]
+D_FORCES = 3  # work done by all forces on the disks, gravity included [J]
+N_DENERGY = 4
+
+
+@dataclass(frozen=True)
+class DiskMaterial:
+    """Material of disks.
+
+    Args:
+        density: ρ [kg/m³] > 0.
+        E: Young's modulus [Pa] > 0 (Hertz contact stiffness).
+        nu: Poisson's ratio, -1 < ν < 0.5.
+        friction: Coulomb coefficient μ ≥ 0.
+        restitution: coefficient of restitution e in (0, 1] of a binary impact.
+        rolling_friction: rolling resistance μ_r ≥ 0 (angular fill), 0 for none.
+    """
+
+    density: float
+    E: float
+    nu: float
+    friction: float = 0.5
+    restitution: float = 0.5
+    rolling_friction: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("density", "E", "nu", "friction", "restitution", "rolling_friction"):
+            value = getattr(self, name)
+            if not isinstance(value, numbers.Real) or not math.isfinite(value):
+                raise ValueError(f"DiskMaterial.{name} must be a finite number, got {value!r}")
+            object.__setattr__(self, name, float(value))
+        if self.density <= 0 or self.E <= 0:
+            raise ValueError("DiskMaterial: density and E must be > 0")
+        if not -1.0 < self.nu < 0.5:
+            raise ValueError(f"DiskMaterial: nu must satisfy -1 < nu < 0.5, got {self.nu}")
+        if self.friction < 0 or self.rolling_friction < 0:
+            raise ValueError("DiskMaterial: friction coefficients must be >= 0")
+        if not 0.0 < self.restitution <= 1.0:
+            raise ValueError(f"DiskMaterial: restitution must lie in (0, 1], got "
+                             f"{self.restitution}")
+
+    def row(self) -> np.ndarray:
+        out = np.zeros(DK.N_DPROPS)
+        out[DK.P_E], out[DK.P_NU], out[DK.P_MU] = self.E, self.nu, self.friction
+        out[DK.P_REST], out[DK.P_MU_ROLL] = self.restitution, self.rolling_friction
+        return out
+
+
+@njit(cache=True)
+def _max_move(x, x_ref):
+    """Largest distance [m] of a disk from its position at the last rebuild."""
+    m2 = 0.0
+    for i in range(x.shape[0]):
+        dx = x[i, 0] - x_ref[i, 0]
+        dy = x[i, 1] - x_ref[i, 1]
+        m2 = max(m2, dx * dx + dy * dy)
+    return math.sqrt(m2)
+
+
+@njit(cache=True)
+def disk_step(x, theta, v, omega, f, torque, m, inertia, fixed, g, damping, dt, energy):
+    """Central-difference step of the disks with mass-proportional damping c [1/s].
+
+    On entry v, ω hold the half step n − ½ and x, θ step n; f, torque the forces [N] and
+    torques [N m] at step n (gravity m g included). Fixed disks (fixed[i] = 1) do not move.
+    ``energy`` (N_DENERGY,) gets the half-step kinetic energy and accumulates the midpoint
+    work of gravity, of damping and of all forces, so that
+    K − K0 + W_damping = W_forces holds to round-off.
+    """
+    a = 1.0 - 0.5 * damping * dt
+    b = 1.0 / (1.0 + 0.5 * damping * dt)
+    ke = 0.0
+    damp = 0.0
+    wg = 0.0
+    wf = 0.0
+    for i in range(x.shape[0]):
+        if fixed[i]:
+            v[i, 0] = 0.0
+            v[i, 1] = 0.0
+            omega[i] = 0.0
+            continue
+        for c in range(2):
+            v_old = v[i, c]
+            v_new = (a * v_old + dt * f[i, c] / m[i]) * b
+            vm = 0.5 * (v_old + v_new)
+            damp += damping * m[i] * vm * vm * dt
+            wg += m[i] * g[c] * vm * dt
+            wf += f[i, c] * vm * dt
+            v[i, c] = v_new
+            x[i, c] += dt * v_new
+            ke += 0.5 * m[i] * v_new * v_new
+        w_old = omega[i]
+        w_new = (a * w_old + dt * torque[i] / inertia[i]) * b
+        wm = 0.5 * (w_old + w_new)
+        damp += damping * inertia[i] * wm * wm * dt
+        wf += torque[i] * wm * dt
+        omega[i] = w_new
+        theta[i] += dt * w_new
+        ke += 0.5 * inertia[i] * w_new * w_new
+    energy[0] = ke
+    energy[1] += wg
+    energy[2] += damp
+    energy[3] += wf
+
+
+@njit(cache=True)
+def _gravity(f, torque, m, g):
+    """f = m g [N], torque = 0."""
+    for i in range(f.shape[0]):
+        f[i, 0] = m[i] * g[0]
+        f[i, 1] = m[i] * g[1]
+        torque[i] = 0.0
+
+
+class Disks:
+    """A set of rigid disks (see the module docstring).
+
+    Args:
+        x: (n, 2) centres [m].
+        r: (n,) radii [m] > 0.
+        materials: material of each material name.
+        material: the material name of every disk (one name, or one per disk).
+        width: out-of-plane thickness w [m] (that of the model they fill).
+        margin: travel allowance of the pair list [m] (default: 0.2 r_min).
+        max_overlap: the largest relative overlap δ/r_min expected, which bounds the
+            Hertz stiffness in the stable time step (default 0.02).
+        comm: MPI communicator (all ranks hold all disks).
+    """
+
+    def __init__(
+        self,
+        x: np.ndarray,
+        r: np.ndarray,
+        materials: Mapping[str, DiskMaterial],
+        material: str | Sequence[str],
+        *,
+        width: float = 1.0,
+        margin: float | None = None,
+        max_overlap: float = 0.02,
+        comm: MPI.Comm = MPI.COMM_WORLD,
+    ):
+        x = np.array(x, dtype=float, copy=True)
+        r = np.array(r, dtype=float, copy=True).ravel()
+        if x.ndim != 2 or x.shape[1] != 2 or x.shape[0] != r.size:
+            raise ValueError(f"disk centres must have shape (n, 2) with n = len(r) = {r.size}, "
+                             f"got {x.shape}")
+        if r.size == 0:
+            raise ValueError("no disks given")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(r)) and np.all(r > 0)):
+            raise ValueError("disk centres must be finite and radii finite and > 0")
+        if not (np.isfinite(width) and width > 0):
+            raise ValueError(f"width must be > 0 m, got {width}")
+        self.names = tuple(materials)
+        for name, mat in materials.items():
+            if not isinstance(mat, DiskMaterial):
+                raise TypeError(f"materials[{name!r}] must be a DiskMaterial")
+        names = [material] * r.size if isinstance(material, str) else list(material)
+        if len(names) != r.size:
+            raise ValueError("give one material name, or one per disk")
+        unknown = sorted(set(names) - set(self.names))
+        if unknown:
+            raise ValueError(f"no DiskMaterial given for {unknown}; have {list(self.names)}")
+        self.comm = comm
+        self.width = float(width)
+        self.n = r.size
+        self.x = x
+        self.r = r
+        lookup = {n: k for k, n in enumerate(self.names)}
+        self.mat = np.array([lookup[n] for n in names], dtype=np.int64)
+        self.materials = dict(materials)
+        rho = np.array([materials[n].density for n in self.names])[self.mat]
+        self.m = rho * np.pi * r * r * self.width
+        self.inertia = 0.5 * self.m * r * r
+        self.theta = np.zeros(self.n)
+        self.v = np.zeros((self.n, 2))
+        self.omega = np.zeros(self.n)
+        self.f = np.zeros((self.n, 2))
+        self.torque = np.zeros(self.n)
+        self.fixed = np.zeros(self.n, dtype=np.int8)
+        self.g = np.zeros(2)
+        self.props = np.array([materials[n].row() for n in self.names])
+        self.table = DK.pair_table(self.props)
+        self.margin = 0.2 * float(r.min()) if margin is None else float(margin)
+        if not self.margin >= 0:
+            raise ValueError("margin must be >= 0 m")
+        self.max_overlap = float(max_overlap)
+        self.pairs = np.empty((0, 2), dtype=np.int64)
+        self.hist = np.zeros((0, DK.N_HIST))
+        self._x_ref = self.x.copy()
+        self.rebuilds = 0
+        self.work = np.zeros(DK.N_WORK)
+        self.energy = np.zeros(N_DENERGY)
+        self.kinetic0 = 0.0
+        self.couplings: list = []
+        self._rebuild()
+
+    # ------------------------------------------------------------------ set-up
+    def add_gravity(self, g: Sequence[float] = (0.0, -G)) -> None:
+        """Gravity acceleration g [m/s²] on every disk."""
+        self.g[:] = np.asarray(g, dtype=float)
+
+    def fix(self, sel: np.ndarray) -> None:
+        """Hold the selected disks (boolean mask or indices) in place."""
+        self.fixed[np.asarray(sel)] = 1
+
+    @property
+    def weight(self) -> float:
+        """Total weight |g| Σ m [N] of the free disks."""
+        return float(np.linalg.norm(self.g) * self.m[self.fixed == 0].sum())
+
+    def kinetic_energy(self) -> float:
+        """½ Σ (m v² + I ω²) [J] at the half step."""
+        return float(0.5 * (self.m * (self.v**2).sum(axis=1)).sum()
+                     + 0.5 * (self.inertia * self.omega**2).sum())
+
+    # ------------------------------------------------------------------ time step
+    def stable_omega2(self, contacts: int = 6) -> float:
+        """Bound of ω² [1/s²] of the disk contacts: ``contacts`` (at most per disk) times the
+        largest single-contact bound over material pairs, disk–disk and disk–wall, for the
+        smallest disk at the overlap ``max_overlap · r_min`` (:func:`pair_omega2` on the
+        stiffest, unloading branch)."""
+        rmin = float(self.r.min())
+        k = int(np.argmin(self.r))
+        m, inertia = float(self.m[k]), float(self.inertia[k])
+        d = self.max_overlap * rmin
+        w2 = 0.0
+        for a in range(len(self.names)):
+            for b in range(len(self.names)):
+                t = self.table[a, b]
+                kn = DK.hertz_stiffness_bound(t[DK.T_ESTAR], rmin, rmin, self.width, d,
+                                              t[DK.T_REST])
+                w2 = max(w2, DK.pair_omega2(kn, t[DK.T_KAPPA], t[DK.T_MU_ROLL], rmin, rmin,
+                                            m, m, inertia, inertia))
+                kw = DK.hertz_stiffness_bound(t[DK.T_ESTAR], rmin, math.inf, self.width, d,
+                                              t[DK.T_REST])
+                w2 = max(w2, DK.pair_omega2(kw, t[DK.T_KAPPA], t[DK.T_MU_ROLL], rmin, rmin,
+                                            m, 1e300, inertia, 1e300))
+        return contacts * w2
+
+    # ------------------------------------------------------------------ per step
+    def _rebuild(self) -> None:
+        pairs = DK.disk_pairs_cell_list(self.x, self.r, self.margin)
+        hist = np.zeros((pairs.shape[0], DK.N_HIST))
+        DK.carry_history(self.pairs, self.hist, pairs, hist)
+        self.pairs, self.hist = pairs, hist
+        self._x_ref[:] = self.x
+        self.rebuilds += 1
+
+    def compute_forces(self, dt: float) -> None:
+        """Gravity and disk–disk contact forces at the current positions into f, torque
+        (block couplings add theirs afterwards)."""
+        if _max_move(self.x, self._x_ref) > 0.5 * self.margin:
+            self._rebuild()
+        _gravity(self.f, self.torque, self.m, self.g)
+        DK.disk_disk_forces(self.x, self.v, self.omega, self.r, self.mat, self.table,
+                            self.pairs, self.hist, self.width, dt, self.f, self.torque,
+                            self.work)
+
+    def advance(self, dt: float, damping: float = 0.0) -> None:
+        """One central-difference step with the forces of :meth:`compute_forces`."""
+        disk_step(self.x, self.theta, self.v, self.omega, self.f, self.torque, self.m,
+                  self.inertia, self.fixed, self.g, damping, dt, self.energy)
+
+    def contact_energies(self) -> dict[str, float]:
+        """Disk–disk contact energies [J]: stored (normal, tangential, rolling) and
+        dissipated (restitution, friction, rolling friction)."""
+        w = self.work
+        return {"normal": float(w[DK.W_EN]), "tangential": float(w[DK.W_ET]),
+                "rolling": float(w[DK.W_ER]), "restitution_loss": float(w[DK.W_HYST]),
+                "friction_loss": float(w[DK.W_FRIC]), "rolling_loss": float(w[DK.W_ROLL])}
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | Path) -> None:
+        """Write the disks (geometry, materials, state) to an ``.npz`` file (rank 0)."""
+        if self.comm.rank == 0:
+            mats = np.array([[*self.materials[n].row(), self.materials[n].density]
+                             for n in self.names])
+            np.savez(path, x=self.x, r=self.r, mat=self.mat, names=np.array(self.names),
+                     mats=mats, theta=self.theta, v=self.v, omega=self.omega,
+                     fixed=self.fixed, width=self.width)
+        self.comm.barrier()
+
+    @classmethod
+    def load(cls, path: str | Path, comm: MPI.Comm = MPI.COMM_WORLD, **kw) -> Disks:
+        """Read disks written by :meth:`save` (state included)."""
+        data = np.load(path, allow_pickle=False)
+        names = [str(n) for n in data["names"]]
+        mats = {}
+        for n, row in zip(names, data["mats"], strict=True):
+            mats[n] = DiskMaterial(density=row[-1], E=row[DK.P_E], nu=row[DK.P_NU],
+                                   friction=row[DK.P_MU], restitution=row[DK.P_REST],
+                                   rolling_friction=row[DK.P_MU_ROLL])
+        disks = cls(data["x"], data["r"], mats, [names[k] for k in data["mat"]],
+                    width=float(data["width"]), comm=comm, **kw)
+        disks.theta[:] = data["theta"]
+        disks.v[:] = data["v"]
+        disks.omega[:] = data["omega"]
+        disks.fixed[:] = data["fixed"]
+        return disks
+
+    def __repr__(self) -> str:
+        return (f"Disks({self.n} disks, r = {self.r.min():.3g}..{self.r.max():.3g} m, "
+                f"{len(self.names)} material(s), {self.pairs.shape[0]} candidate pairs)")

@@ -1,0 +1,70 @@
+"""Disks advanced by the explicit solver: binary impacts against the Hertz law."""
+
+from __future__ import annotations
+
+import math
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+from conftest import rectangle
+
+from masonry_fdem import Material, Model
+from masonry_fdem.contact import _disk_kernels as DK
+from masonry_fdem.disks import DiskMaterial, Disks
+from masonry_fdem.geometry import mesh_blocks
+from masonry_fdem.solvers import ExplicitSolver
+
+W = 0.05  # out-of-plane thickness [m]
+R = 0.01  # disk radius [m]
+GRAVEL = dict(density=2600.0, E=1e9, nu=0.25, friction=0.5)
+
+
+def far_block(comm=MPI.COMM_SELF):
+    """A fixed block far from the disks (the solver advances a model of blocks)."""
+    blocks = mesh_blocks([rectangle(5.0, 5.0, 5.1, 5.1)], materials="stone", mesh_size=0.1,
+                         comm=comm)
+    m = Model(blocks, {"stone": Material(density=2400.0, E=1e9, nu=0.2)}, width=W, comm=comm)
+    m.fix_blocks(0)
+    return m
+
+
+def head_on(e: float, v0: float = 1.0):
+    """Restitution, kinetic energy ratio and contact duration of a head-on impact."""
+    mat = DiskMaterial(**GRAVEL, restitution=e)
+    disks = Disks([[0.0, 0.0], [2 * R + 1e-4, 0.0]], [R, R], {"gravel": mat}, "gravel",
+                  width=W, comm=MPI.COMM_SELF)
+    disks.v[0, 0], disks.v[1, 0] = v0, -v0
+    ke0 = disks.kinetic_energy()
+    model = far_block()
+    t_c = 3.21807 * (0.5 * disks.m[0] / DK.hertz_k(disks.table[0, 0, DK.T_ESTAR], R, R, W))**0.4 \
+        * (2 * v0) ** -0.2
+    s = ExplicitSolver(model, dt=min(t_c / 400, 0.9 * 2 / math.sqrt(disks.stable_omega2())),
+                       disks=disks)
+    touching, t_in, t_out = False, None, None
+    for _ in range(200_000):
+        s.step()
+        d = np.linalg.norm(disks.x[1] - disks.x[0])
+        if d < 2 * R and not touching:
+            touching, t_in = True, s.t
+        elif d >= 2 * R and touching:
+            t_out = s.t
+            break
+    rel_v = (disks.v[1, 0] - disks.v[0, 0]) / (2 * v0)
+    return rel_v, disks.kinetic_energy() / ke0, t_out - t_in, t_c, s.dt
+
+
+@pytest.mark.parametrize("e", [0.5, 0.9])
+def test_head_on_impact_restitution(e):
+    rel_v, _, _, _, _ = head_on(e)
+    print(f"\nhead-on impact through the solver, e = {e}: measured {rel_v:.5f}")
+    assert abs(rel_v / e - 1.0) < 0.02
+
+
+def test_elastic_impact_energy_and_contact_duration():
+    rel_v, ke, dur, t_c, dt = head_on(1.0)
+    print(f"\nelastic impact: KE after/before {ke:.6f}; contact {dur * 1e6:.2f} us against "
+          f"Hertz {t_c * 1e6:.2f} us ({dur / t_c - 1:+.2%}; dt = {dt * 1e6:.3f} us)")
+    assert abs(ke - 1.0) < 0.005
+    assert abs(dur / t_c - 1.0) < 0.02
