@@ -68,3 +68,31 @@ def test_elastic_impact_energy_and_contact_duration():
           f"Hertz {t_c * 1e6:.2f} us ({dur / t_c - 1:+.2%}; dt = {dt * 1e6:.3f} us)")
     assert abs(ke - 1.0) < 0.005
     assert abs(dur / t_c - 1.0) < 0.02
+
+
+def test_disk_output_and_picture(tmp_path):
+    import base64
+    import xml.etree.ElementTree as ET
+
+    from masonry_fdem.io import DiskOutput, plot_blocks
+
+    out = tmp_path / f"rank{MPI.COMM_WORLD.rank}"
+    mat = DiskMaterial(**GRAVEL)
+    rng = np.random.default_rng(3)
+    disks = Disks(rng.uniform(0, 1, (20, 2)), rng.uniform(0.01, 0.03, 20), {"g": mat}, "g",
+                  comm=MPI.COMM_SELF)
+    disks.v[:] = rng.normal(size=(20, 2))
+    w = DiskOutput(disks, out)
+    w.write(0.0)
+    w.write(0.1)
+    root = ET.parse(out / "disks_00001.vtp").getroot()
+    arrays = {a.get("Name"): a for a in root.iter("DataArray")}
+    raw = base64.b64decode(arrays["radius"].text)
+    # a base64 UInt64 byte count (12 chars) precedes the data block
+    radius = np.frombuffer(base64.b64decode(arrays["radius"].text[12:]), dtype="<f8")
+    assert len(raw) > 0 and np.array_equal(radius, disks.r)
+    vel = np.frombuffer(base64.b64decode(arrays["velocity"].text[12:]), dtype="<f8")
+    assert np.array_equal(vel.reshape(-1, 3)[:, :2], disks.v)
+    assert (out / "disks.pvd").read_text().count("<DataSet") == 2
+    png = plot_blocks(far_block(), out / "disks.png", disks=disks)
+    assert png is not None and png.exists()

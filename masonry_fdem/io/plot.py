@@ -24,6 +24,7 @@ def plot_blocks(
     cmap: str = "viridis",
     show_edges: bool = False,
     joints=None,
+    disks=None,
 ) -> Path | None:
     """Draw the blocks in their deformed position, coloured by a field (collective).
 
@@ -39,6 +40,8 @@ def plot_blocks(
         joints: the model's :class:`~masonry_fdem.contact.Joints`: joints that are not
             intact are drawn over the blocks, coloured by state (softening, open, sliding,
             crushed) — the crack pattern.
+        disks: a :class:`~masonry_fdem.disks.Disks` set, drawn as grey circles with a
+            radius line showing their rotation.
 
     Returns:
         The path on rank 0, None on other ranks.
@@ -109,6 +112,17 @@ def plot_blocks(
                                                  label=JOINT_STATES[code]))
         if np.any(jstate > 0):
             ax.legend(loc="upper right", fontsize=7)
+    if disks is not None:
+        from matplotlib.collections import PatchCollection
+        from matplotlib.patches import Circle
+
+        circles = [Circle((cx, cy), rr) for (cx, cy), rr in zip(disks.x, disks.r, strict=True)]
+        ax.add_collection(PatchCollection(circles, facecolor="0.75", edgecolor="0.3",
+                                          linewidth=0.3))
+        tip = disks.x + disks.r[:, None] * np.c_[np.cos(disks.theta), np.sin(disks.theta)]
+        ax.add_collection(LineCollection(np.stack([disks.x, tip], axis=1), colors="0.3",
+                                         linewidths=0.3))
+        ax.autoscale_view()
     fig.colorbar(pc, ax=ax, label=label, shrink=0.8)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
