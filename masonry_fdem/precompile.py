@@ -98,6 +98,9 @@ def precompile() -> None:
     dd.advance(1e-3, 0.1)
     DK.brute_force_disk_pairs(dd.x, dd.r, 0.1)
     DK.hertz_force(1.0, 0.5, 0.1, 0.2)
+    from masonry_fdem.packing import pack_disks
+
+    pack_disks(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), 0.1, 0.15, 0.5)
 
     from masonry_fdem.contact.adt import brute_force_pairs, query_adt, self_pairs
 

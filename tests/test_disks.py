@@ -96,3 +96,29 @@ def test_disk_output_and_picture(tmp_path):
     assert (out / "disks.pvd").read_text().count("<DataSet") == 2
     png = plot_blocks(far_block(), out / "disks.png", disks=disks)
     assert png is not None and png.exists()
+
+
+@pytest.mark.parametrize("porosity", [0.35, 0.22])
+def test_packing_fills_a_region_at_the_target_porosity(porosity):
+    from masonry_fdem.packing import pack_disks
+
+    poly = np.array([[0.0, 0.0], [0.6, 0.0], [0.6, 0.3], [0.3, 0.45], [0.0, 0.3]])
+    x, r = pack_disks(poly, 0.008, 0.016, porosity, seed=2)
+    area = 0.5 * np.sum(poly[:, 0] * np.roll(poly[:, 1], -1) - np.roll(poly[:, 0], -1)
+                        * poly[:, 1])
+    got = 1.0 - np.pi * np.sum(r * r) / area
+    d = np.linalg.norm(x[:, None] - x[None], axis=2) + np.eye(len(r)) * 1e9
+    overlap = np.max(r[:, None] + r[None] - d) / 0.008
+    # every disk inside the polygon, clear of its edges (to the same tolerance)
+    a, b = poly, np.roll(poly, -1, axis=0)
+    e = b - a
+    t = np.clip(((x[:, None] - a) * e).sum(2) / (e * e).sum(1), 0, 1)
+    dist = np.linalg.norm(a + t[..., None] * e - x[:, None], axis=2).min(axis=1)
+    inside = np.all((e[:, 0] * (x[:, None, 1] - a[:, 1])
+                     - e[:, 1] * (x[:, None, 0] - a[:, 0])) >= 0, axis=1)
+    print(f"\npacking: {len(r)} disks, porosity {got:.6f} (target {porosity}), "
+          f"largest overlap {overlap:.1e} r_min")
+    assert abs(got - porosity) < 1e-12
+    assert overlap < 2e-3
+    assert np.all(inside) and np.all(dist > r - 2e-3 * 0.008)
+    assert 0.008 * 0.99 < r.min() and r.max() < 0.016 * 1.3  # scaled to the exact area
