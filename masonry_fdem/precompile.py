@@ -98,6 +98,20 @@ def precompile() -> None:
     dd.advance(1e-3, 0.1)
     DK.brute_force_disk_pairs(dd.x, dd.r, 0.1)
     DK.hertz_force(1.0, 0.5, 0.1, 0.2)
+    from masonry_fdem.contact import _disk_facet_kernels as DF
+    from masonry_fdem.contact.disk_block import _max_node_move
+
+    xd = np.array([[0.5, 1.05]])
+    vd = np.zeros((1, 2))
+    pairs1 = np.array([[0, 0]], dtype=np.int64)
+    prm = np.zeros((1, DF.N_PARAM))
+    prm[0, [DF.P_EPS_A, DF.P_WIDTH, DF.P_KT, DF.P_MU, DF.P_CN]] = [1e6, 1.0, 1e3, 0.5, 1.0]
+    DF.disk_block_forces(X, uu, uu, facets, fprev, fnext, xd, vd, np.zeros(1), np.full(1, 0.1),
+                         pairs1, np.array([0, 4], dtype=np.int64), np.arange(4, dtype=np.int64),
+                         prm, np.zeros((1, DF.N_HIST)), 1e-3, np.zeros(8), np.zeros((1, 2)),
+                         np.zeros(1), np.zeros(DF.N_WORK), np.zeros((1, DF.N_OUT)),
+                         np.zeros((4, DF.N_PART)))
+    _max_node_move(X, uu, uu, np.arange(4, dtype=np.int64))
     from masonry_fdem.packing import pack_disks
 
     pack_disks(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), 0.1, 0.15, 0.5)

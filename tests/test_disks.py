@@ -122,3 +122,89 @@ def test_packing_fills_a_region_at_the_target_porosity(porosity):
     assert overlap < 2e-3
     assert np.all(inside) and np.all(dist > r - 2e-3 * 0.008)
     assert 0.008 * 0.99 < r.min() and r.max() < 0.016 * 1.3  # scaled to the exact area
+
+
+def _settle(model, disks, solver, t_end):
+    solver.run(t_end=t_end, every=500)
+    return solver
+
+
+def test_disk_resting_on_a_deformable_block_loads_it_with_its_weight():
+    from masonry_fdem.contact import DiskBlockContact
+
+    blocks = mesh_blocks([rectangle(0.0, 0.0, 0.2, 0.05)], materials="stone", mesh_size=0.02,
+                         comm=MPI.COMM_WORLD)
+    model = Model(blocks, {"stone": Material(density=2400.0, E=1e9, nu=0.2)}, width=W)
+    model.fix(lambda X: np.isclose(X[1], 0.0), name="base")
+    disks = Disks([[0.083, 0.05 + R]], [R], {"g": DiskMaterial(**GRAVEL)}, "g", width=W)
+    disks.add_gravity()
+    DiskBlockContact(disks, model, damping_ratio=0.3)
+    s = ExplicitSolver(model, disks=disks, damping=30.0)
+    s.run(t_end=0.3, every=1000)
+    ry = s.reactions()["base"][1]
+    print(f"\ndisk on a deformable block: base reaction {ry:.6f} N, disk weight "
+          f"{disks.weight:.6f} N ({ry / disks.weight - 1:+.2e})")
+    assert abs(ry / disks.weight - 1.0) < 1e-3
+
+
+def test_settled_column_base_carries_the_weight():
+    from masonry_fdem.contact import DiskBlockContact
+    from masonry_fdem.packing import pack_disks
+
+    comm = MPI.COMM_WORLD
+    polys = [rectangle(-0.02, -0.02, 0.08, 0.0), rectangle(-0.02, 0.0, 0.0, 0.2),
+             rectangle(0.06, 0.0, 0.08, 0.2)]
+    blocks = mesh_blocks(polys, materials="steel", mesh_size=0.02, comm=comm)
+    model = Model(blocks, {"steel": Material(density=7800.0, E=2e10, nu=0.3)}, width=W,
+                  comm=comm)
+    model.fix_blocks(0, name="base")
+    model.fix_blocks([1, 2], name="walls")
+    x, r = pack_disks(np.array([[0.0, 0.0], [0.06, 0.0], [0.06, 0.15], [0.0, 0.15]]), 0.004,
+                      0.006, 0.4, seed=5)
+    disks = Disks(x, r, {"g": DiskMaterial(**GRAVEL, restitution=0.3)}, "g", width=W,
+                  comm=comm)
+    disks.add_gravity()
+    DiskBlockContact(disks, model, friction=0.0, damping_ratio=0.5)
+    s = ExplicitSolver(model, disks=disks, damping=20.0)
+    s.run(t_end=0.6, every=2000)
+    rb = s.reactions()["base"]
+    rw = s.reactions()["walls"]
+    ke = disks.kinetic_energy()
+    print(f"\nsettled column ({disks.n} disks): base reaction {rb[1]:.5f} N, weight "
+          f"{disks.weight:.5f} N ({rb[1] / disks.weight - 1:+.2e}); walls (frictionless) "
+          f"{rw[1]:.2e} N vertical; kinetic energy {ke:.1e} J")
+    assert abs(rb[1] / disks.weight - 1.0) < 0.005
+    assert abs(rw[1]) < 1e-6 * disks.weight
+
+
+def _column(comm, t_end):
+    from masonry_fdem.contact import DiskBlockContact
+    from masonry_fdem.packing import pack_disks
+
+    polys = [rectangle(-0.02, -0.02, 0.08, 0.0), rectangle(-0.02, 0.0, 0.0, 0.2),
+             rectangle(0.06, 0.0, 0.08, 0.2)]
+    blocks = mesh_blocks(polys, materials="stone", mesh_size=0.01, comm=comm)
+    model = Model(blocks, {"stone": Material(density=2400.0, E=1e9, nu=0.2)}, width=W,
+                  comm=comm)
+    model.fix(lambda X: np.isclose(X[1], -0.02), name="base")
+    model.fix(lambda X: (X[1] > 0.19), name="wall tops")
+    x, r = pack_disks(np.array([[0.0, 0.0], [0.06, 0.0], [0.06, 0.15], [0.0, 0.15]]), 0.004,
+                      0.006, 0.4, seed=5)
+    disks = Disks(x, r, {"g": DiskMaterial(**GRAVEL, restitution=0.3)}, "g", width=W,
+                  comm=comm)
+    disks.add_gravity()
+    DiskBlockContact(disks, model, damping_ratio=0.2)
+    s = ExplicitSolver(model, disks=disks, damping=5.0)
+    s.run(t_end=t_end, every=1000)
+    return disks.x.copy(), model.displacement(), s.reactions()["base"]
+
+
+def test_disks_on_deformable_blocks_same_on_any_number_of_ranks():
+    xw, uw, rw = _column(MPI.COMM_WORLD, 0.08)
+    xs, us, rs = _column(MPI.COMM_SELF, 0.08)
+    dx = np.abs(xw - xs).max() / np.abs(xs).max()
+    du = np.abs(uw - us).max() / np.abs(us).max()
+    dr = np.abs(rw - rs).max() / np.abs(rs).max()
+    print(f"\ndisks in deformable box, {MPI.COMM_WORLD.size} rank(s) vs 1: disk positions "
+          f"{dx:.1e}, block displacements {du:.1e}, base reaction {dr:.1e}")
+    assert max(dx, du, dr) < 1e-10

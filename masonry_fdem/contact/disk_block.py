@@ -1,0 +1,228 @@
+"""Contact between disks (granular fill) and deformable blocks, as in the reference
+paper's Figure 4: one normal force from the disk's overlap with the block, split among
+the touching facets by overlap area, P_n,i = P_n A_i/A, each part directed through the
+centroid of its overlap area; Coulomb friction with an incremental spring; the reactions
+distributed to the facet nodes (:mod:`masonry_fdem.contact._disk_facet_kernels`).
+
+Candidate (disk, facet) pairs come from the alternating digital tree of the local facets'
+boxes queried with the disks' boxes, both inflated by a travel margin; they are found
+again when a disk or a facet node has moved by half the margin. The friction history is
+kept per (disk, block) pair, so a disk rolling over a vertex keeps it.
+
+Every rank computes the contacts of the blocks it owns; the forces on the disks are
+summed over ranks (every rank holds every disk). Units SI.
+"""
+
+from __future__ import annotations
+
+import math
+
+from mpi4py import MPI
+
+import numpy as np
+from numba import njit
+
+from masonry_fdem.contact import _disk_facet_kernels as DF
+from masonry_fdem.contact import _kernels as C
+from masonry_fdem.contact.adt import build_adt, query_adt
+
+__all__ = ["DiskBlockContact"]
+
+
+@njit(cache=True)
+def _max_node_move(X, u, u_ref, nodes):
+    m2 = 0.0
+    for k in range(nodes.size):
+        i = nodes[k]
+        dx = u[2 * i] - u_ref[2 * i]
+        dy = u[2 * i + 1] - u_ref[2 * i + 1]
+        m2 = max(m2, dx * dx + dy * dy)
+    return math.sqrt(m2)
+
+
+class DiskBlockContact:
+    """Disk–block contact (see the module docstring).
+
+    Args:
+        disks: the :class:`~masonry_fdem.disks.Disks` set (registered with it).
+        model: the :class:`~masonry_fdem.model.Model` of the blocks.
+        friction: Coulomb coefficient μ between disks and blocks (default: the disks').
+        stiffness: penalty factor: the contact's tangent stiffness per unit thickness is
+            ``stiffness · E*`` at the reference overlap ``rel_overlap · r`` (E* from the
+            disk and block moduli, plane strain).
+        rel_overlap: reference overlap δ/r of that stiffness.
+        tangential_ratio: k_t / (ε_a w r) of the friction spring.
+        damping_ratio: normal viscous damping as a fraction of critical for the disk on a
+            rigid block at the reference overlap (0: elastic).
+        margin: travel margin [m] of the candidate list (default 0.2 r_min).
+    """
+
+    def __init__(self, disks, model, *, friction: float | None = None, stiffness: float = 1.0,
+                 rel_overlap: float = 0.01, tangential_ratio: float = 0.5,
+                 damping_ratio: float = 0.0, margin: float | None = None):
+        if not (stiffness > 0 and 0 < rel_overlap < 1 and tangential_ratio >= 0
+                and damping_ratio >= 0):
+            raise ValueError("stiffness and rel_overlap must be > 0 (rel_overlap < 1), "
+                             "tangential_ratio and damping_ratio >= 0")
+        if disks.comm.size != model.comm.size:
+            raise ValueError("disks and model must live on the same communicator")
+        self.disks = disks
+        self.model = model
+        self.comm = model.comm
+        blocks = model.blocks
+        gf = np.asarray(blocks.boundary_facets, dtype=np.int64)
+        first = np.full(blocks.n_nodes, -1, dtype=np.int64)
+        first[gf[:, 0]] = np.arange(gf.shape[0])
+        g_next = first[gf[:, 1]]
+        g_block = np.asarray(blocks.facet_block, dtype=np.int64)
+        mine = np.flatnonzero(model.block_ranks()[g_block] == self.comm.rank)
+        local_of_input = np.full(blocks.n_nodes, -1, dtype=np.int64)
+        local_of_input[model.node_input] = np.arange(model.n_nodes)
+        renum = np.full(gf.shape[0], -1, dtype=np.int64)
+        renum[mine] = np.arange(mine.size)
+        self.facets = np.ascontiguousarray(local_of_input[gf[mine]])
+        self.fnext = np.ascontiguousarray(renum[g_next[mine]])
+        self.fprev = np.empty_like(self.fnext)
+        self.fprev[self.fnext] = np.arange(mine.size)
+        self.facet_block = np.ascontiguousarray(g_block[mine])
+        self.nodes = np.unique(self.facets)
+        self.X = np.ascontiguousarray(model.X)
+        # constants per (disk material, block material)
+        nd = len(disks.names)
+        bnames = blocks.material_names
+        self.block_mat = blocks.block_material.astype(np.int64)
+        r_ref = float(disks.r.mean())
+        self.table = np.zeros((nd, len(bnames), DF.N_PARAM))
+        for a, dn in enumerate(disks.names):
+            dm = disks.materials[dn]
+            for b, bn in enumerate(bnames):
+                bm = model.materials[bn]
+                e_star = DF.plane_strain_modulus(dm.E, dm.nu, bm.E, bm.nu)
+                eps = DF.area_penalty(e_star, r_ref, rel_overlap, stiffness)
+                self.table[a, b, DF.P_EPS_A] = eps
+                self.table[a, b, DF.P_WIDTH] = disks.width
+                self.table[a, b, DF.P_KT] = tangential_ratio * eps * disks.width * r_ref
+                self.table[a, b, DF.P_MU] = dm.friction if friction is None else friction
+        self.damping_ratio = float(damping_ratio)
+        self.rel_overlap = rel_overlap
+        self.margin = 0.2 * float(disks.r.min()) if margin is None else float(margin)
+        self.boxes = np.zeros((self.facets.shape[0], 4))
+        self.u_ref = np.zeros_like(model.u.x.array)
+        self.x_ref = disks.x.copy()
+        self.pairs = np.zeros((0, 2), dtype=np.int64)
+        self.ptr = np.zeros(1, dtype=np.int64)
+        self.cand = np.zeros(0, dtype=np.int64)
+        self.params = np.zeros((0, DF.N_PARAM))
+        self.hist = np.zeros((0, DF.N_HIST))
+        self.out = np.zeros((0, DF.N_OUT))
+        self.parts = np.zeros((0, DF.N_PART))
+        self.work = np.zeros(DF.N_WORK)
+        self.dissipated = 0.0
+        self.f_disk = np.zeros_like(disks.f)
+        self.torque = np.zeros_like(disks.torque)
+        self._sum = np.zeros(3 * disks.n)
+        self.rebuilds = 0
+        self._fresh = True
+        disks.couplings.append(self)
+
+    # ------------------------------------------------------------------ time step
+    def stable_omega2(self) -> float:
+        """ω² bound [1/s²] of a disk on a rigid block: max(2 ε_a w r, 3 k_t)/m over disk
+        and block materials (smallest disk), plus the damping's effect (collective)."""
+        d = self.disks
+        k = int(np.argmin(d.m))
+        w2 = 0.0
+        for a in range(self.table.shape[0]):
+            for b in range(self.table.shape[1]):
+                p = self.table[a, b]
+                kk = max(DF.stiffness_bound(p[DF.P_EPS_A], p[DF.P_WIDTH], d.r[k]),
+                         3.0 * p[DF.P_KT])
+                w2 = max(w2, kk / d.m[k])
+        z = self.damping_ratio
+        return w2 / (math.sqrt(1.0 + z * z) - z) ** 2
+
+    # ------------------------------------------------------------------ per step
+    def _rebuild(self) -> None:
+        d = self.disks
+        m = self.model
+        u = m.u.x.array
+        nf = self.facets.shape[0]
+        hist_old, keys_old = self.hist, self._keys() if self.pairs.size else np.zeros(0, np.int64)
+        if nf == 0:
+            qi = np.zeros(0, dtype=np.int64)
+            it = np.zeros(0, dtype=np.int64)
+        else:
+            C.facet_boxes(self.X, u, self.facets, self.margin, self.boxes)
+            tree = build_adt(self.boxes)
+            rr = d.r + self.margin
+            qboxes = np.c_[d.x[:, 0] - rr, d.x[:, 1] - rr, d.x[:, 0] + rr, d.x[:, 1] + rr]
+            qi, it = query_adt(tree, qboxes)
+        blk = self.facet_block[it]
+        order = np.lexsort((it, blk, qi))
+        qi, it, blk = qi[order], it[order], blk[order]
+        if qi.size:
+            new = np.r_[True, (qi[1:] != qi[:-1]) | (blk[1:] != blk[:-1])]
+            starts = np.flatnonzero(new)
+        else:
+            starts = np.zeros(0, dtype=np.int64)
+        self.pairs = np.ascontiguousarray(np.c_[qi[starts], blk[starts]], dtype=np.int64)
+        self.ptr = np.r_[starts, qi.size].astype(np.int64)
+        self.cand = np.ascontiguousarray(it, dtype=np.int64)
+        npairs = starts.size
+        self.params = np.zeros((npairs, DF.N_PARAM))
+        if npairs:
+            self.params[:] = self.table[d.mat[self.pairs[:, 0]], self.block_mat[self.pairs[:, 1]]]
+            if self.damping_ratio > 0:
+                mass = d.m[self.pairs[:, 0]]
+                kref = 2.0 * self.params[:, DF.P_EPS_A] * self.params[:, DF.P_WIDTH] * np.sqrt(
+                    self.rel_overlap * (2.0 - self.rel_overlap)) * d.r[self.pairs[:, 0]]
+                self.params[:, DF.P_CN] = 2.0 * self.damping_ratio * np.sqrt(kref * mass)
+        self.hist = np.zeros((npairs, DF.N_HIST))
+        if keys_old.size and npairs:
+            keys = self._keys()
+            pos = np.searchsorted(keys_old, keys)
+            pos = np.minimum(pos, keys_old.size - 1)
+            hit = keys_old[pos] == keys
+            self.hist[hit] = hist_old[pos[hit]]
+        self.out = np.zeros((npairs, DF.N_OUT))
+        self.parts = np.zeros((self.cand.size, DF.N_PART))
+        self.u_ref[:] = u
+        self.x_ref[:] = d.x
+        self.rebuilds += 1
+
+    def _keys(self) -> np.ndarray:
+        return self.pairs[:, 0] * (self.model.blocks.n_blocks + 1) + self.pairs[:, 1]
+
+    def add_forces(self, f, v, dt) -> None:
+        """Add the contact forces on the block nodes to ``f`` (flat, local dofs) and on the
+        disks to ``disks.f`` and ``disks.torque`` (summed over ranks)."""
+        from masonry_fdem.disks import _max_move
+
+        d = self.disks
+        u = self.model.u.x.array
+        if (self._fresh or _max_move(d.x, self.x_ref) > 0.5 * self.margin
+                or _max_node_move(self.X, u, self.u_ref, self.nodes) > 0.5 * self.margin):
+            self._rebuild()
+            self._fresh = False
+        self.f_disk.fill(0.0)
+        self.torque.fill(0.0)
+        DF.disk_block_forces(self.X, u, v, self.facets, self.fprev, self.fnext, d.x, d.v,
+                             d.omega, d.r, self.pairs, self.ptr, self.cand, self.params,
+                             self.hist, dt, f, self.f_disk, self.torque, self.work, self.out,
+                             self.parts)
+        self.dissipated += self.work[DF.W_FRICTION] + self.work[DF.W_DAMPING]
+        if self.comm.size > 1:
+            buf = self._sum
+            n = d.n
+            buf[: 2 * n] = self.f_disk.ravel()
+            buf[2 * n:] = self.torque
+            self.comm.Allreduce(MPI.IN_PLACE, buf, op=MPI.SUM)
+            d.f += buf[: 2 * n].reshape(-1, 2)
+            d.torque += buf[2 * n:]
+        else:
+            d.f += self.f_disk
+            d.torque += self.torque
+
+    def stored_energy(self) -> float:
+        """Elastic energy in the disk–block contacts now [J] (collective)."""
+        return self.comm.allreduce(float(self.work[DF.W_NORMAL] + self.work[DF.W_TANGENT]))
