@@ -124,9 +124,26 @@ def test_packing_fills_a_region_at_the_target_porosity(porosity):
     assert 0.008 * 0.99 < r.min() and r.max() < 0.016 * 1.3  # scaled to the exact area
 
 
-def _settle(model, disks, solver, t_end):
-    solver.run(t_end=t_end, every=500)
-    return solver
+def test_disk_on_a_deformable_block_by_dynamic_relaxation():
+    """The disks take part in dynamic relaxation: a disk on a deformable block."""
+    from masonry_fdem.contact import DiskBlockContact
+    from masonry_fdem.solvers import DynamicRelaxation
+
+    blocks = mesh_blocks([rectangle(0.0, 0.0, 0.2, 0.05)], materials="stone", mesh_size=0.02,
+                         comm=MPI.COMM_WORLD)
+    model = Model(blocks, {"stone": Material(density=2400.0, E=1e9, nu=0.2)}, width=W)
+    model.fix(lambda X: np.isclose(X[1], 0.0), name="base")
+    disks = Disks([[0.083, 0.05 + 0.999 * R]], [R], {"g": DiskMaterial(**GRAVEL)}, "g",
+                  width=W)
+    disks.add_gravity()
+    DiskBlockContact(disks, model)
+    dr = DynamicRelaxation(model, disks=disks, rtol=1e-6)
+    res = dr.solve(1.0)
+    ry = dr.reactions()["base"][1]
+    print(f"\ndisk on a block by dynamic relaxation: {res.iterations} iterations; base "
+          f"reaction {ry / disks.weight - 1:+.2e} of the disk weight")
+    assert res.converged
+    assert abs(ry / disks.weight - 1.0) < 1e-5
 
 
 def test_disk_resting_on_a_deformable_block_loads_it_with_its_weight():

@@ -76,6 +76,10 @@ class DynamicRelaxation:
             Joint states are trial states computed from the last converged increment and
             committed only when an increment converges. So is the material state of the
             blocks (damage, plastic strain): committed only at a converged increment.
+        disks: a :class:`~masonry_fdem.disks.Disks` set with its block couplings: the disk
+            positions and rotations join the unknowns, with fictitious masses from the
+            bound of their contact stiffness (the disks' friction histories follow the
+            iteration; they are not rolled back).
     """
 
     def __init__(
@@ -87,6 +91,7 @@ class DynamicRelaxation:
         max_iter: int = 200_000,
         mass_safety: float = 1.1,
         contact=None,
+        disks=None,
     ):
         if not rtol > 0:
             raise ValueError(f"rtol must be > 0, got {rtol}")
@@ -112,6 +117,22 @@ class DynamicRelaxation:
         self.f_net = np.zeros_like(model.f_int)  # f_int − f_contact
         self._sums = np.zeros(4)
         self.results: list[DRResult] = []
+        self.disks = disks
+        if disks is not None:
+            n = disks.n
+            w2 = disks.stable_omega2() + sum(c.stable_omega2() for c in disks.couplings)
+            k_bound = w2 * float(disks.m.min())  # the stiffest spring a disk can feel
+            self.dm = np.empty(3 * n)
+            self.dm.reshape(-1, 3)[:, :2] = (mass_safety * 0.25 * self.dt**2 * k_bound)
+            self.dm.reshape(-1, 3)[:, 2] = self.dm[0] * disks.r**2
+            self.dq = np.zeros(3 * n)
+            self.dq0 = np.zeros(3 * n)
+            self.dv = np.zeros(3 * n)
+            self.df = np.zeros(3 * n)
+            self.df0 = np.zeros(3 * n)
+            self.dfext = np.zeros(3 * n)
+            self.dpresc = np.repeat(disks.fixed, 3).astype(np.int8)
+            self._dsums = np.zeros(4)
 
     def solve(
         self,
@@ -137,9 +158,16 @@ class DynamicRelaxation:
         m.external_force(load_factor, out=self.f_ext)
         free = self.presc == 0
         ref2 = comm.allreduce(float(np.dot(self.f_ext[free], self.f_ext[free])))
+        if self.disks is not None:  # the disks' weights are applied loads too
+            dw = self.disks.m[self.disks.fixed == 0]
+            ref2 += float(np.dot(dw, dw)) * float(np.dot(self.disks.g, self.disks.g))
         u = m.u.x.array
         u0 = u.copy()
         self.v[:] = 0.0
+        d = self.disks
+        if d is not None:
+            self._pack_disks(self.dq0)
+            self.dv[:] = 0.0
         ke_peak = 0.0
         c = 0.0
         r_norm = math.inf
@@ -155,6 +183,15 @@ class DynamicRelaxation:
             K.dr_measure(u, u0, self.v, f_net, self.f_int0, self.f_ext, self.mfict,
                          self.presc, self._sums)
             r2, num, den, ke = comm.allreduce(self._sums)
+            if d is not None:  # every rank holds every disk: add their share once
+                if it == 1:
+                    self.df0[:] = self.df
+                K.dr_measure(self.dq, self.dq0, self.dv, self.df, self.df0, self.dfext,
+                             self.dm, self.dpresc, self._dsums)
+                r2 += self._dsums[0]
+                num += self._dsums[1]
+                den += self._dsums[2]
+                ke += self._dsums[3]
             r_norm = math.sqrt(r2)
             ke_peak = max(ke_peak, ke)
             if r_norm <= self.rtol * ref and ke <= self.ke_tol * max(ke_peak, 1e-300):
@@ -171,6 +208,10 @@ class DynamicRelaxation:
             # the iteration undamped
             K.dr_update(u, self.v, f_net, self.f_ext, self.mfict, self.presc, c, self.dt,
                         it == 1)
+            if d is not None:
+                K.dr_update(self.dq, self.dv, self.df, self.dfext, self.dm, self.dpresc, c,
+                            self.dt, it == 1)
+                self._unpack_disks()
         if converged:
             m.commit_state()
             for c in self.interactions:
@@ -201,18 +242,48 @@ class DynamicRelaxation:
                     sel = p.components == comp
                     u[p.dofs[sel]] = float(val[comp])
 
+    def _pack_disks(self, q) -> None:
+        d = self.disks
+        q3 = q.reshape(-1, 3)
+        q3[:, :2] = d.x
+        q3[:, 2] = d.theta
+
+    def _unpack_disks(self) -> None:
+        d = self.disks
+        q3 = self.dq.reshape(-1, 3)
+        d.x[:] = q3[:, :2]
+        d.theta[:] = q3[:, 2]
+        v3 = self.dv.reshape(-1, 3)
+        d.v[:] = v3[:, :2]  # displacement increments per iteration (dt = 1)
+        d.omega[:] = v3[:, 2]
+
     def _resisting_force(self) -> np.ndarray:
-        """f_int(u) − f_contact(u) [N]: what the applied loads must balance."""
+        """f_int(u) − f_contact(u) [N]: what the applied loads must balance. With disks,
+        also their resisting forces −(f, torque) into ``self.df`` (gravity included)."""
         m = self.model
         m.internal_force(m.f_int)
-        if not self.interactions:
-            return m.f_int
-        np.negative(m.f_int, out=self.f_net)
-        for c in self.interactions:
-            c.update_neighbours(self.v, self.dt)
-            c.add_forces(self.f_net, self.v, self.dt, damping=False)
-        np.negative(self.f_net, out=self.f_net)
-        return self.f_net
+        d = self.disks
+        if not self.interactions and (d is None or not d.couplings):
+            out = m.f_int
+        else:
+            np.negative(m.f_int, out=self.f_net)
+            for c in self.interactions:
+                c.update_neighbours(self.v, self.dt)
+                c.add_forces(self.f_net, self.v, self.dt, damping=False)
+            out = self.f_net
+        if d is not None:
+            d.compute_forces(self.dt)
+            for c in d.couplings:
+                if out is m.f_int:
+                    raise RuntimeError("unreachable")
+                c.add_forces(self.f_net, self.v, self.dt)
+            df3 = self.df.reshape(-1, 3)
+            np.negative(d.f, out=df3[:, :2])
+            np.negative(d.torque, out=df3[:, 2])
+            self._pack_disks(self.dq)
+        if out is self.f_net:
+            np.negative(self.f_net, out=self.f_net)
+        return out
 
     def load_steps(
         self,
