@@ -33,6 +33,7 @@ demo: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/topple_wall.py --out out_topple_wall
 	$(MPIRUN) -n $(NP) $(PY) demos/shear_wall.py --out out_shear_wall
 	$(MPIRUN) -n $(NP) $(PY) demos/materials.py --out out_materials
+	$(MPIRUN) -n $(NP) $(PY) demos/silo.py --out out_silo
 
 test: test-serial test-parallel
 

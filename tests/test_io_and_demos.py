@@ -124,3 +124,16 @@ def test_materials_demo_small(shared_tmp, monkeypatch, capsys):
         assert (out / "load_settlement.png").exists() and (out / "history.csv").exists()
         for name in ("displacement.bp", "stress.bp", "materials.bp"):
             assert (out / name).is_dir() and any((out / name).iterdir())
+
+
+def test_silo_demo_small(shared_tmp, monkeypatch, capsys):
+    out = shared_tmp / "silo"
+    monkeypatch.setattr(sys, "argv", ["silo.py", "--height", "0.15", "--time", "0.12",
+                                      "--radius", "0.006", "--out", str(out)])
+    runpy.run_path(str(ROOT / "demos" / "silo.py"), run_name="__main__")
+    text = capsys.readouterr().out
+    if comm.rank == 0:
+        line = [x for x in text.splitlines() if x.startswith("discharge rate")][0]
+        assert float(line.split()[2]) > 0
+        for name in ("history.csv", "discharge.png", "silo_final.png", "disks.pvd"):
+            assert (out / name).exists()

