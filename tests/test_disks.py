@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 from mpi4py import MPI
 
@@ -225,3 +226,22 @@ def test_disks_on_deformable_blocks_same_on_any_number_of_ranks():
     print(f"\ndisks in deformable box, {MPI.COMM_WORLD.size} rank(s) vs 1: disk positions "
           f"{dx:.1e}, block displacements {du:.1e}, base reaction {dr:.1e}")
     assert max(dx, du, dr) < 1e-10
+
+
+def test_disks_saved_and_loaded(tmp_path):
+    out = Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0)) / "fill.npz"
+    rng = np.random.default_rng(4)
+    mats = {"a": DiskMaterial(**GRAVEL), "b": DiskMaterial(density=2000.0, E=5e8, nu=0.3,
+                                                           restitution=0.7,
+                                                           rolling_friction=0.1)}
+    disks = Disks(rng.uniform(0, 1, (30, 2)), rng.uniform(0.01, 0.02, 30), mats,
+                  ["a", "b"] * 15, width=W)
+    disks.v[:] = rng.normal(size=(30, 2))
+    disks.omega[:] = rng.normal(size=30)
+    disks.theta[:] = rng.normal(size=30)
+    disks.fix([0, 3])
+    disks.save(out)
+    back = Disks.load(out)
+    for name in ("x", "r", "mat", "v", "omega", "theta", "fixed", "m", "inertia", "props"):
+        assert np.array_equal(getattr(back, name), getattr(disks, name)), name
+    assert back.materials == disks.materials and back.width == disks.width
