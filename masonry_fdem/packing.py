@@ -15,8 +15,9 @@ distribution and whose total area is exactly ``(1 − porosity) × region area``
 
 Dense random 2D packings jam near a solid fraction of 0.82–0.84 (porosity 0.16–0.18), so
 targets below about 0.2 may not relax fully; the largest remaining overlap is reported.
-A packing is then typically settled under gravity by the explicit solver (the fill then
-compacts a little further).
+The disks are returned in a spatial (cell-by-cell) order, which keeps neighbours close
+in memory. A packing is then typically settled under gravity by the explicit solver (the
+fill then compacts a little further).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from numba import njit
 
 from masonry_fdem.contact._disk_kernels import disk_pairs_cell_list
 
-__all__ = ["pack_disks"]
+__all__ = ["pack_disks", "spatial_order"]
 
 
 @njit(cache=True)
@@ -211,4 +212,17 @@ def pack_disks(
         raise ValueError(
             f"packing at porosity {porosity} left overlaps of {worst / r_min:.3g} r_min "
             "(denser than the disks can pack: raise the porosity or widen the size range)")
-    return x, r
+    order = spatial_order(x, 2.0 * r_max)
+    return x[order].copy(), r[order].copy()
+
+
+def spatial_order(x: np.ndarray, h: float) -> np.ndarray:
+    """A permutation putting points [m] in row-by-row order of cells of size h [m]
+    (serpentine within a row): neighbours in space become neighbours in memory, which
+    the contact kernels need at large numbers of disks (random order was 4-7x slower
+    at 1e5-1e6 disks in ``benchmarks/disks.py``)."""
+    x = np.asarray(x, dtype=float)
+    c = np.floor((x - x.min(axis=0)) / h).astype(np.int64)
+    row = c[:, 1]
+    col = np.where(row % 2 == 0, c[:, 0], -c[:, 0])
+    return np.lexsort((x[:, 0], col, row))
