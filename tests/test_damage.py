@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import alternating_grid
 
 from masonry_fdem import Model
 from masonry_fdem.geometry import BlockMesh
@@ -23,20 +24,10 @@ FT = 3e6
 
 
 def bar(h: float) -> BlockMesh:
-    nx, ny = round(L / h), round(D / h)
-    xs, ys = np.linspace(0, L, nx + 1), np.linspace(0, D, ny + 1)
-    X, Y = np.meshgrid(xs, ys, indexing="ij")
-    i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-    i, j = i.ravel(), j.ravel()
-    a, b = i * (ny + 1) + j, (i + 1) * (ny + 1) + j
-    c, d = b + 1, a + 1
-    even = (i + j) % 2 == 0
-    t1 = np.where(even[:, None], np.c_[a, b, c], np.c_[a, b, d])
-    t2 = np.where(even[:, None], np.c_[a, c, d], np.c_[b, c, d])
-    cells = np.concatenate([t1, t2])
-    weak = np.tile(i == nx // 2, 2)
-    return BlockMesh.from_arrays(np.c_[X.ravel(), Y.ravel()], cells,
-                                 np.zeros(len(cells), dtype=np.int64), block_names=["bar"],
+    x, cells, col = alternating_grid(L, D, h)
+    weak = col == round(L / h) // 2
+    return BlockMesh.from_arrays(x, cells, np.zeros(len(cells), dtype=np.int64),
+                                 block_names=["bar"],
                                  material_names=["concrete", "weak"],
                                  cell_material=weak.astype(np.int64), mixed_materials=True)
 

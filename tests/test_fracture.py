@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from conftest import alternating_grid
 
 from masonry_fdem import Material, Model
 from masonry_fdem.contact import JointMaterial, Joints
@@ -25,19 +26,8 @@ CRACK = JointMaterial(ft=1e6, GfI=50.0, c=1.5e6, GfII=500.0, tan_phi=0.8, penalt
 
 def beam(h: float) -> BlockMesh:
     """The beam as one unit on an nx × ny grid of alternating right triangles."""
-    nx, ny = round(L / h), round(D / h)
-    xs, ys = np.linspace(0, L, nx + 1), np.linspace(0, D, ny + 1)
-    X, Y = np.meshgrid(xs, ys, indexing="ij")
-    i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
-    i, j = i.ravel(), j.ravel()
-    a, b = i * (ny + 1) + j, (i + 1) * (ny + 1) + j
-    c, d = b + 1, a + 1
-    even = (i + j) % 2 == 0
-    t1 = np.where(even[:, None], np.c_[a, b, c], np.c_[a, b, d])
-    t2 = np.where(even[:, None], np.c_[a, c, d], np.c_[b, c, d])
-    cells = np.concatenate([t1, t2])
-    return BlockMesh.from_arrays(np.c_[X.ravel(), Y.ravel()], cells,
-                                 np.zeros(cells.shape[0], dtype=np.int64),
+    x, cells, _ = alternating_grid(L, D, h)
+    return BlockMesh.from_arrays(x, cells, np.zeros(cells.shape[0], dtype=np.int64),
                                  block_names=["beam"], material_names=["unit"])
 
 

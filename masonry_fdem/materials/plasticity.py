@@ -93,11 +93,20 @@ class ReturnMapping(Material):
     def energy_density(self, k):
         return k.energy
 
-    def _elastic(self, prm: np.ndarray, hypothesis: Hypothesis) -> None:
+    def _coulomb_params(self, hypothesis: Hypothesis) -> np.ndarray:
+        """Kernel parameters shared by the Coulomb-type laws: 3D elastic constants, the
+        out-of-plane hypothesis, c, sin φ, sin ψ and the cohesion hardening."""
+        prm = np.zeros(PK.N_PRM)
         E, nu = self.E, self.nu
         prm[PK.P_LAM] = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
         prm[PK.P_MU] = E / (2.0 * (1.0 + nu))
         prm[PK.P_PLANE_STRESS] = 1.0 if Hypothesis(hypothesis) is Hypothesis.PLANE_STRESS else 0.0
+        prm[PK.P_C] = self.c
+        prm[PK.P_SINPHI] = math.sin(math.radians(self.phi))
+        prm[PK.P_SINPSI] = math.sin(math.radians(self.psi))
+        prm[PK.P_H] = self.hardening
+        prm[PK.P_CMIN] = self.c_min
+        return prm
 
 
 @dataclass(frozen=True)
@@ -146,13 +155,7 @@ class MohrCoulomb(ReturnMapping):
         return 2.0 * self.c * math.cos(p) / (1.0 + math.sin(p))
 
     def kernel_params(self, hypothesis: Hypothesis) -> np.ndarray:
-        prm = np.zeros(PK.N_PRM)
-        self._elastic(prm, hypothesis)
-        prm[PK.P_C] = self.c
-        prm[PK.P_SINPHI] = math.sin(math.radians(self.phi))
-        prm[PK.P_SINPSI] = math.sin(math.radians(self.psi))
-        prm[PK.P_H] = self.hardening
-        prm[PK.P_CMIN] = self.c_min
+        prm = self._coulomb_params(hypothesis)
         prm[PK.P_SURFACE] = 0.0
         return prm
 
@@ -195,13 +198,7 @@ class DruckerPrager(ReturnMapping):
                                 math.sin(math.radians(self.psi)), self.fit)
 
     def kernel_params(self, hypothesis: Hypothesis) -> np.ndarray:
-        prm = np.zeros(PK.N_PRM)
-        self._elastic(prm, hypothesis)
-        prm[PK.P_C] = self.c
-        prm[PK.P_SINPHI] = math.sin(math.radians(self.phi))
-        prm[PK.P_SINPSI] = math.sin(math.radians(self.psi))
-        prm[PK.P_H] = self.hardening
-        prm[PK.P_CMIN] = self.c_min
+        prm = self._coulomb_params(hypothesis)
         prm[PK.P_ETA] = self.viscosity
         prm[PK.P_SURFACE] = 1.0
         eta, xi, etabar = self.cone()
