@@ -125,6 +125,29 @@ def precompile() -> None:
 
     query_adt(build_adt(boxes), boxes)
 
+    from masonry_fdem import _anchor_kernels as AK
+
+    xa = np.array([[0.0, 0.5], [0.5, 0.5]])
+    ua = np.zeros(4)
+    conn = np.array([[0, 1]], dtype=np.int64)
+    ep = np.ones((1, AK.N_EP))
+    es = np.zeros((1, AK.N_ES))
+    AK.bar_forces(xa, ua, conn, np.full(1, 0.5), ep, np.zeros(1, np.int8), es, es.copy(),
+                  np.zeros(1), np.zeros(1), np.zeros(4))
+    hn = np.array([0, 1], dtype=np.int64)
+    he = np.zeros(2, dtype=np.int64)
+    hosts = np.array([[0, 1, 2], [-1, -1, -1]], dtype=np.int64)
+    hw = np.full((2, 3), 1.0 / 3.0)
+    npr = np.ones((2, AK.N_NP))
+    npr[:, AK.NP_LAW] = 0.0
+    ns = np.zeros((2, AK.N_NS))
+    AK.bond_forces(xa, ua, uu, conn, hn, he, hosts, hw, npr, np.ones((1, 1)), np.ones((1, 1)),
+                   np.ones(1, dtype=np.int64), np.ones(1), np.zeros((2, 2)), ns, ns.copy(),
+                   np.zeros((2, AK.N_NO)), np.zeros(4), np.zeros(8))
+    AK.relative_displacements(ua, uu, hn, hosts, hw, np.zeros((2, 2)))
+    AK.anchor_step(ua, ua.copy(), ua.copy(), np.ones(4), np.zeros(4, np.int8), ua.copy(), 0.0,
+                   1e-3, ua.copy())
+
 
 if __name__ == "__main__":
     precompile()

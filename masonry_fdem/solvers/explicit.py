@@ -68,6 +68,8 @@ class ExplicitSolver:
             interact). Their springs are included in the stable time step.
         disks: a :class:`~masonry_fdem.disks.Disks` set (granular fill) advanced by the same
             step, with its couplings to the blocks; its contact springs bound the step too.
+        anchors: the :class:`~masonry_fdem.anchors.Anchors` of the model (repairs): their
+            bar nodes are advanced by the same step; their springs bound the step.
 
     Raises:
         UnstableTimeStepError: ``dt`` exceeds the critical time step.
@@ -83,10 +85,14 @@ class ExplicitSolver:
         load_factor: float | Callable[[float], float] = 1.0,
         contact=None,
         disks=None,
+        anchors=None,
     ):
         self.model = model
         self.contact = contact
         self.interactions = as_interactions(contact)
+        self.anchors = anchors
+        if anchors is not None:
+            self.interactions.append(anchors)
         self.disks = disks
         self.dt_critical = model.stable_time_step(
             extra_omega2=sum(c.stable_omega2() for c in self.interactions)
@@ -161,6 +167,9 @@ class ExplicitSolver:
         )
         if d is not None:
             d.advance(self.dt, self.damping)
+        if self.anchors is not None:
+            a = self.anchors
+            a.advance(self.dt, self.damping)
         self.t += self.dt
         self.n += 1
 
@@ -206,6 +215,8 @@ class ExplicitSolver:
 
     def _finite(self) -> bool:
         ok = bool(np.isfinite(self.energy[K.E_KINETIC]) and np.isfinite(self.model.v).all())
+        if self.anchors is not None:
+            ok = ok and bool(np.isfinite(self.anchors.v).all())
         return bool(self.model.comm.allreduce(ok, op=MPI.LAND))
 
     def energies(self) -> EnergyAccount:
@@ -229,4 +240,8 @@ class ExplicitSolver:
             r = np.zeros(2)
             np.add.at(r, p.components, self.reaction[p.dofs])
             out[p.name] = self.model.comm.allreduce(r)
+        if self.anchors is not None:
+            a = self.anchors
+            for name, dofs in a.prescriptions.items():
+                out[name] = a.reaction[dofs].copy()
         return out

@@ -1,0 +1,290 @@
+"""Numba kernels of the embedded anchors (flat arrays, no allocation per call).
+
+Conventions (see :mod:`masonry_fdem.anchors`): anchor node ``i`` has displacement
+``ua[2i:2i+2]`` [m] and reference position ``xa[i]``; bar element ``e`` joins nodes
+``conn[e, 0] → conn[e, 1]``. Forces are accumulated (``+=``) into the output arrays.
+
+Element columns of ``ep`` (one row per bar element, ``count`` bars in the row):
+
+* ``EP_AREA`` total steel area count·A [m²], ``EP_E`` Young's modulus [Pa],
+  ``EP_FY`` yield stress [Pa], ``EP_H`` linear isotropic hardening modulus [Pa],
+  ``EP_EPSU`` rupture strain [-], ``EP_JACK`` jacking force of the row [N].
+
+Element state columns (committed ``es`` / trial ``et``): ``ES_EPSP`` plastic strain,
+``ES_ALPHA`` accumulated plastic strain, ``ES_RUPT`` 1 once ruptured.
+
+Bond points are the halves of the bonded bar elements (node ``hnode[h]`` of element
+``helem[h]``, tributary length ℓ = L_e/2, host triangle of the block holding that half).
+Their columns of ``npr``: ``NP_BOND`` bond area count·perimeter·ℓ [m²], ``NP_KT``
+transverse (dowel) stiffness count·k_t·ℓ [N/m], ``NP_QY`` dowel strength count·q_y·ℓ
+[N], ``NP_KP`` end-plate stiffness count·k_p [N/m], ``NP_PLATE`` +1 start plate, -1 end plate,
+0 none, ``NP_LAW`` bond law index, ``NP_BONDED`` 1 if the bond acts (0 while jacking).
+
+Bond-point state columns (``ns`` / ``nt``): ``NS_SP`` plastic slip [m], ``NS_KAPPA``
+accumulated plastic slip [m], ``NS_WP`` plastic transverse displacement [m].
+
+Bond-point output columns (``out``): ``NO_SLIP`` [m], ``NO_TAU`` bond stress [Pa], ``NO_W``
+transverse relative displacement [m], ``NO_Q`` transverse force [N], ``NO_PLATE`` plate
+force [N].
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+EP_AREA, EP_E, EP_FY, EP_H, EP_EPSU, EP_JACK = range(6)
+N_EP = 6
+ES_EPSP, ES_ALPHA, ES_RUPT = range(3)
+N_ES = 3
+NP_BOND, NP_KT, NP_QY, NP_KP, NP_PLATE, NP_LAW, NP_BONDED = range(7)
+N_NP = 7
+NS_SP, NS_KAPPA, NS_WP = range(3)
+N_NS = 3
+NO_SLIP, NO_TAU, NO_W, NO_Q, NO_PLATE = range(5)
+N_NO = 5
+
+
+@njit(cache=True)
+def envelope(law_s, law_t, nk, s):
+    """Bond stress on the monotonic envelope at slip ``s`` >= 0 [Pa]: piecewise linear
+    through (0, 0) and the ``nk`` table points; constant beyond the last point."""
+    s0 = 0.0
+    t0 = 0.0
+    for k in range(nk):
+        s1 = law_s[k]
+        t1 = law_t[k]
+        if s <= s1:
+            return t0 + (t1 - t0) * (s - s0) / (s1 - s0)
+        s0 = s1
+        t0 = t1
+    return t0
+
+
+@njit(cache=True)
+def bond_return(law_s, law_t, nk, k0, s, sp, kappa, res):
+    """Bond stress at total slip ``s`` from the committed plastic slip ``sp`` and
+    accumulated plastic slip ``kappa`` (elastic unloading with the initial stiffness
+    ``k0``, loading on the envelope). res = (tau, sp_new, kappa_new).
+
+    On the envelope the envelope coordinate is s_e = kappa + |tau|/k0; for a trial stress
+    tau_tr = k0 (s - sp) it is s_e = kappa + |tau_tr|/k0, so the return is closed-form.
+    Requires every envelope slope <= k0 (checked when the law is made).
+    """
+    ttr = k0 * (s - sp)
+    a = abs(ttr)
+    se = kappa + a / k0
+    env = envelope(law_s, law_t, nk, se)
+    if env >= a:
+        res[0] = ttr
+        res[1] = sp
+        res[2] = kappa
+        return
+    sg = 1.0 if ttr >= 0.0 else -1.0
+    tau = sg * env
+    res[0] = tau
+    res[1] = s - tau / k0
+    res[2] = se - env / k0
+
+
+@njit(cache=True)
+def steel_return(eps, E, fy, H, epsu, epsp, alpha, rupt, res):
+    """Uniaxial elasto-plastic steel with linear isotropic hardening and rupture.
+
+    res = (stress [Pa], epsp, alpha, ruptured). A bar whose strain reaches ``epsu`` in
+    tension ruptures and carries nothing from then on.
+    """
+    if rupt > 0.5 or eps >= epsu:
+        res[0] = 0.0
+        res[1] = epsp
+        res[2] = alpha
+        res[3] = 1.0
+        return
+    sig = E * (eps - epsp)
+    f = abs(sig) - (fy + H * alpha)
+    if f > 0.0:
+        dg = f / (E + H)
+        sg = 1.0 if sig >= 0.0 else -1.0
+        sig -= sg * E * dg
+        epsp += sg * dg
+        alpha += dg
+    res[0] = sig
+    res[1] = epsp
+    res[2] = alpha
+    res[3] = 0.0
+
+
+@njit(cache=True)
+def bar_forces(xa, ua, conn, L0, ep, jacking, es, et, axial, strain, fa):
+    """Axial forces of the bar elements at the current node positions into ``fa`` (+=);
+    trial element state into ``et``; row axial force [N] and strain into ``axial``,
+    ``strain``. A jacking element carries its jacking force whatever its length."""
+    res = np.empty(4)
+    for e in range(conn.shape[0]):
+        a = conn[e, 0]
+        b = conn[e, 1]
+        dx = xa[b, 0] + ua[2 * b] - xa[a, 0] - ua[2 * a]
+        dy = xa[b, 1] + ua[2 * b + 1] - xa[a, 1] - ua[2 * a + 1]
+        ell = math.sqrt(dx * dx + dy * dy)
+        eps = (ell - L0[e]) / L0[e]
+        strain[e] = eps
+        if jacking[e]:
+            n = ep[e, EP_JACK]
+            et[e, ES_EPSP] = es[e, ES_EPSP]
+            et[e, ES_ALPHA] = es[e, ES_ALPHA]
+            et[e, ES_RUPT] = es[e, ES_RUPT]
+        else:
+            steel_return(eps, ep[e, EP_E], ep[e, EP_FY], ep[e, EP_H], ep[e, EP_EPSU],
+                         es[e, ES_EPSP], es[e, ES_ALPHA], es[e, ES_RUPT], res)
+            n = res[0] * ep[e, EP_AREA]
+            et[e, ES_EPSP] = res[1]
+            et[e, ES_ALPHA] = res[2]
+            et[e, ES_RUPT] = res[3]
+        axial[e] = n
+        if ell > 0.0:
+            fx = n * dx / ell
+            fy = n * dy / ell
+            fa[2 * a] += fx
+            fa[2 * a + 1] += fy
+            fa[2 * b] -= fx
+            fa[2 * b + 1] -= fy
+
+
+@njit(cache=True)
+def element_tangent(xa, ua, conn, e, t):
+    """Unit vector of bar element ``e`` from its first to its second node (current)."""
+    a = conn[e, 0]
+    b = conn[e, 1]
+    dx = xa[b, 0] + ua[2 * b] - xa[a, 0] - ua[2 * a]
+    dy = xa[b, 1] + ua[2 * b + 1] - xa[a, 1] - ua[2 * a + 1]
+    ell = math.sqrt(dx * dx + dy * dy)
+    if ell == 0.0:
+        t[0] = 1.0
+        t[1] = 0.0
+    else:
+        t[0] = dx / ell
+        t[1] = dy / ell
+
+
+@njit(cache=True)
+def relative_displacement(ua, ub, hnode, hosts, hw, h, d):
+    """Displacement of the bar node of bond point ``h`` relative to its host material
+    point [m]."""
+    hx = 0.0
+    hy = 0.0
+    for k in range(3):
+        j = hosts[h, k]
+        hx += hw[h, k] * ub[2 * j]
+        hy += hw[h, k] * ub[2 * j + 1]
+    i = hnode[h]
+    d[0] = ua[2 * i] - hx
+    d[1] = ua[2 * i + 1] - hy
+
+
+@njit(cache=True)
+def bond_forces(xa, ua, ub, conn, hnode, helem, hosts, hw, npr, laws_s, laws_t, laws_n,
+                laws_k0, dref, ns, nt, out, fa, fb):
+    """Bond, dowel and end-plate forces of the bond points with a host on this rank.
+
+    A bond point is one half of a bonded bar element: its bar node, the tributary half
+    length, and the host triangle (of the block holding that half) in which the node
+    lies. Slip s = (d − d_ref)·t and transverse displacement w = d·n, with d the
+    displacement of the node relative to its host material point, t the element's unit
+    vector and n = (−t_y, t_x). Forces on the bar node go to ``fa``, the opposite forces
+    to the host triangle's nodes in ``fb`` (+=). Points without a local host
+    (``hosts[h, 0] < 0``) are skipped and their outputs zeroed.
+    """
+    t = np.empty(2)
+    d = np.empty(2)
+    res = np.empty(3)
+    for h in range(hnode.size):
+        if hosts[h, 0] < 0:
+            for c in range(out.shape[1]):
+                out[h, c] = 0.0
+            continue
+        element_tangent(xa, ua, conn, helem[h], t)
+        relative_displacement(ua, ub, hnode, hosts, hw, h, d)
+        nx = -t[1]
+        ny = t[0]
+        # bond along the bar
+        s = (d[0] - dref[h, 0]) * t[0] + (d[1] - dref[h, 1]) * t[1]
+        tau = 0.0
+        if npr[h, NP_BONDED] > 0.5 and npr[h, NP_BOND] > 0.0:
+            law = int(npr[h, NP_LAW])
+            bond_return(laws_s[law], laws_t[law], laws_n[law], laws_k0[law], s,
+                        ns[h, NS_SP], ns[h, NS_KAPPA], res)
+            tau = res[0]
+            nt[h, NS_SP] = res[1]
+            nt[h, NS_KAPPA] = res[2]
+        else:
+            nt[h, NS_SP] = ns[h, NS_SP]
+            nt[h, NS_KAPPA] = ns[h, NS_KAPPA]
+        fs = -npr[h, NP_BOND] * tau  # along t, on the bar node
+        # transverse tie (elastic, or elastic-perfectly plastic dowel)
+        w = d[0] * nx + d[1] * ny
+        q = 0.0
+        wp = ns[h, NS_WP]
+        kt = npr[h, NP_KT]
+        if kt > 0.0:
+            q = kt * (w - wp)
+            qy = npr[h, NP_QY]
+            if abs(q) > qy:
+                q = qy if q > 0.0 else -qy
+                wp = w - q / kt
+        nt[h, NS_WP] = wp
+        # end plate: bears when the bar pulls its end into the block
+        fp = 0.0
+        side = npr[h, NP_PLATE]
+        if side != 0.0:
+            sp = d[0] * t[0] + d[1] * t[1]
+            if side * sp > 0.0:
+                fp = npr[h, NP_KP] * sp
+        gx = (fs - fp) * t[0] - q * nx
+        gy = (fs - fp) * t[1] - q * ny
+        i = hnode[h]
+        fa[2 * i] += gx
+        fa[2 * i + 1] += gy
+        for k in range(3):
+            j = hosts[h, k]
+            fb[2 * j] -= hw[h, k] * gx
+            fb[2 * j + 1] -= hw[h, k] * gy
+        out[h, NO_SLIP] = s
+        out[h, NO_TAU] = tau
+        out[h, NO_W] = w
+        out[h, NO_Q] = q
+        out[h, NO_PLATE] = fp
+
+
+@njit(cache=True)
+def relative_displacements(ua, ub, hnode, hosts, hw, d):
+    """d[h] = displacement of bond point h's node relative to its host (local hosts)."""
+    tmp = np.empty(2)
+    for h in range(hosts.shape[0]):
+        if hosts[h, 0] < 0:
+            d[h, 0] = 0.0
+            d[h, 1] = 0.0
+            continue
+        relative_displacement(ua, ub, hnode, hosts, hw, h, tmp)
+        d[h, 0] = tmp[0]
+        d[h, 1] = tmp[1]
+
+
+@njit(cache=True)
+def anchor_step(u, v, f, m, presc, vp, damping, dt, reaction):
+    """Central-difference step of the anchor nodes (lumped mass, mass-proportional
+    damping α [1/s]); prescribed dofs move with ``vp`` and ``reaction`` gets the force the
+    support applies [N]. Returns the kinetic energy at the half step [J]."""
+    a1 = 1.0 - 0.5 * damping * dt
+    a2 = 1.0 / (1.0 + 0.5 * damping * dt)
+    kin = 0.0
+    for i in range(u.size):
+        vo = v[i]
+        if presc[i]:
+            vn = vp[i]
+            reaction[i] = m[i] * (vn - vo) / dt + 0.5 * damping * m[i] * (vn + vo) - f[i]
+        else:
+            vn = (a1 * vo + dt * f[i] / m[i]) * a2
+        kin += 0.5 * m[i] * vn * vn
+        v[i] = vn
+        u[i] += dt * vn
+    return kin

@@ -1,0 +1,911 @@
+"""Repairs: grouted steel anchors embedded in the masonry, with bond–slip and prestress.
+
+An :class:`Anchor` is a polyline (usually straight) through the blocks with a steel bar of
+diameter ``d`` in a grouted hole. :class:`Anchors` discretises every anchor into 1D bar
+elements (truss elements, axial force only) whose nodes are located once, at set-up, in
+a host triangle of the block mesh (reference barycentric coordinates of the containing
+element). The bar nodes have their own degrees of freedom: they move with the bar, not
+with the masonry, and the two are tied by
+
+* **bond** along the bar: force ``count·π·d_b·L_i·τ(s)`` on node ``i`` with tributary
+  length ``L_i``, where the slip ``s`` is the displacement of the bar node relative to its
+  host material point, along the current bar tangent. ``τ(s)`` is a :class:`BondLaw`:
+  a piecewise-linear envelope from a pull-out test (rising, then softening), with elastic
+  unloading at the initial stiffness (plastic slip);
+* a **transverse tie** across the bar: stiff and elastic by default (stiffness per metre of
+  bar equal to the host block's Young's modulus, the modulus of a Winkler foundation of a
+  bar in an elastic continuum), or a :class:`DowelLaw` (elastic–perfectly plastic);
+* optional **end plates**, bearing (compression only) between a bar end and its block.
+
+The bar is elasto-plastic steel with linear hardening and rupture (:class:`SteelLaw`).
+Anchors cross joints, cracks and ring interfaces: a bar element whose two nodes are hosted
+by different blocks is what carries tension across an opening joint.
+
+**Prestress.** An anchor with ``prestress = P > 0`` needs end plates at both ends. It starts
+*jacking*: every bar element holds the force P whatever its length, the bond is inactive
+(the bar slides in its duct) and the plates push the blocks together. After the structure
+has come to equilibrium under the jacking force (one dynamic-relaxation solve, or a damped
+explicit run), :meth:`Anchors.lock_off` locks the bar at its current length with force P and
+grouts it: the bond acts from then on, its slip measured from the locked-off position.
+
+**Out-of-plane.** In a plane model of width ``w`` an anchor stands for a row of ``count``
+identical bars across the width; the forces on the blocks are ``count`` times a bar's.
+Reported forces (:meth:`Anchors.axial_force`) are per bar.
+
+**Parallel.** Every rank holds every anchor node (they are few). The rank owning a node's
+host block computes its bond, dowel and plate forces; one ``Allreduce`` per step sums the
+anchor-node forces; the bar forces and the anchor-node update are then computed
+identically on every rank.
+
+Units: SI (m, N, Pa, kg).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem import _anchor_kernels as AK
+
+__all__ = [
+    "SteelLaw",
+    "BondLaw",
+    "DowelLaw",
+    "Anchor",
+    "Anchors",
+    "straight_anchor",
+    "radial_anchors",
+    "intrados_stitch",
+    "wall_ties",
+]
+
+# a spring of any direction adds at most this times its stiffness to a dof's row sum
+_DIR = 0.5 * (1.0 + math.sqrt(2.0))
+_PLATES = {"none": (0, 0), "start": (1, 0), "end": (0, 1), "both": (1, 1)}
+
+
+def _positive(name: str, value: float, allow_zero: bool = False, allow_inf: bool = False):
+    ok = (value >= 0 if allow_zero else value > 0) and (allow_inf or np.isfinite(value))
+    if not (np.isscalar(value) and not np.isnan(value) and ok):
+        sign = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be {sign}, got {value}")
+
+
+@dataclass(frozen=True)
+class SteelLaw:
+    """Uniaxial elasto-plastic steel of the bar.
+
+    Args:
+        E: Young's modulus [Pa].
+        yield_stress: f_y [Pa].
+        hardening: linear isotropic hardening modulus H [Pa] (stress rises by H per unit
+            plastic strain); 0 for perfect plasticity.
+        rupture_strain: total (engineering) strain at which the bar breaks in tension [-];
+            it carries nothing afterwards.
+        density: [kg/m³] (mass of the bar nodes).
+    """
+
+    E: float = 200e9
+    yield_stress: float = 500e6
+    hardening: float = 0.0
+    rupture_strain: float = 0.10
+    density: float = 7850.0
+
+    def __post_init__(self) -> None:
+        _positive("steel E", self.E)
+        _positive("steel yield_stress", self.yield_stress)
+        _positive("steel hardening", self.hardening, allow_zero=True)
+        _positive("steel density", self.density)
+        _positive("steel rupture_strain", self.rupture_strain, allow_inf=True)
+        if self.rupture_strain <= self.yield_stress / self.E:
+            raise ValueError(
+                f"rupture_strain {self.rupture_strain} must exceed the yield strain "
+                f"{self.yield_stress / self.E:.4g}")
+
+    def stress(self, strain: np.ndarray) -> np.ndarray:
+        """Stress [Pa] on a monotonic path to ``strain`` (tension positive; for checks)."""
+        eps = np.asarray(strain, dtype=float)
+        ey = self.yield_stress / self.E
+        a = np.abs(eps)
+        hard = self.E * self.hardening / (self.E + self.hardening)
+        sig = np.where(a <= ey, self.E * a, self.yield_stress + hard * (a - ey))
+        sig = np.where(eps >= self.rupture_strain, 0.0, sig)
+        return np.sign(eps) * sig
+
+
+@dataclass(frozen=True)
+class BondLaw:
+    """Bond stress–slip law τ(s) of the grouted anchor, from a pull-out test.
+
+    The envelope is piecewise linear through (0, 0) and the table points
+    ``(slip[k], stress[k])``, constant beyond the last point (give a last point with
+    stress 0 for a bond that is lost completely). It is odd in the slip. Unloading and
+    reloading follow the initial stiffness ``k0 = stress[0]/slip[0]`` (the slip then has
+    a plastic part); no later segment may be steeper than ``k0``.
+
+    Args:
+        slip: table slips [m], increasing, > 0.
+        stress: table bond stresses [Pa], >= 0, the first one > 0.
+    """
+
+    slip: tuple[float, ...]
+    stress: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.slip, dtype=float).ravel()
+        t = np.asarray(self.stress, dtype=float).ravel()
+        if s.size == 0 or s.size != t.size:
+            raise ValueError("bond law needs as many slips as stresses (at least one point)")
+        if not (np.all(np.isfinite(s)) and np.all(np.isfinite(t))):
+            raise ValueError("bond law table must be finite")
+        if s[0] <= 0 or np.any(np.diff(s) <= 0):
+            raise ValueError(f"bond law slips must be > 0 and increasing, got {s.tolist()}")
+        if np.any(t < 0) or t[0] <= 0:
+            raise ValueError(f"bond stresses must be >= 0 with the first > 0, got {t.tolist()}")
+        k0 = t[0] / s[0]
+        slopes = np.diff(t) / np.diff(s)
+        if np.any(slopes > k0 * (1 + 1e-12)):
+            raise ValueError(
+                "no segment of the bond law may be steeper than the first one "
+                f"(k0 = {k0:.4g} Pa/m, slopes {slopes.tolist()})")
+        object.__setattr__(self, "slip", tuple(float(x) for x in s))
+        object.__setattr__(self, "stress", tuple(float(x) for x in t))
+
+    @classmethod
+    def uniform(cls, strength: float, elastic_slip: float) -> BondLaw:
+        """Elastic up to ``strength`` [Pa] at ``elastic_slip`` [m], then constant (plastic)."""
+        return cls((elastic_slip, 1e3 * elastic_slip + 1.0), (strength, strength))
+
+    @classmethod
+    def linear(cls, stiffness: float, up_to: float = 1.0) -> BondLaw:
+        """Linear elastic bond τ = k s [Pa] with k = ``stiffness`` [Pa/m] (up to the slip
+        ``up_to`` [m], constant beyond)."""
+        return cls((up_to,), (stiffness * up_to,))
+
+    @property
+    def k0(self) -> float:
+        """Initial (and unloading) stiffness [Pa/m]."""
+        return self.stress[0] / self.slip[0]
+
+    @property
+    def strength(self) -> float:
+        """Peak bond stress [Pa]."""
+        return max(self.stress)
+
+    def envelope(self, s: np.ndarray) -> np.ndarray:
+        """τ on the monotonic envelope at slip ``s`` [m] (odd) [Pa]."""
+        s = np.asarray(s, dtype=float)
+        xs = np.r_[0.0, self.slip]
+        ts = np.r_[0.0, self.stress]
+        return np.sign(s) * np.interp(np.abs(s), xs, ts, right=ts[-1])
+
+
+@dataclass(frozen=True)
+class DowelLaw:
+    """Transverse tie between bar and masonry: elastic–perfectly plastic.
+
+    Args:
+        stiffness: force per metre of bar per metre of transverse displacement [N/m²].
+        strength: largest transverse force per metre of bar [N/m] (inf: elastic).
+    """
+
+    stiffness: float
+    strength: float = math.inf
+
+    def __post_init__(self) -> None:
+        _positive("dowel stiffness", self.stiffness)
+        _positive("dowel strength", self.strength, allow_inf=True)
+
+
+@dataclass(frozen=True)
+class Anchor:
+    """One anchor (or a row of ``count`` identical anchors across the model's width).
+
+    Args:
+        points: ``(k, 2)`` polyline [m] from its start to its end, k >= 2.
+        diameter: bar diameter d [m] (steel area π d²/4).
+        steel: the bar's :class:`SteelLaw`.
+        bond: the grout bond's :class:`BondLaw`.
+        bond_diameter: diameter of the bonded surface [m] (the grout sock of a Cintec
+            anchor); default the bar diameter.
+        prestress: lock-off force P [N] per bar (needs ``plates="both"``).
+        plates: end plates at "none", "start", "end" or "both" ends.
+        plate_stiffness: bearing stiffness of a plate on the masonry [N/m] per bar;
+            default E_host · 0.1 m (a 100 mm plate on an elastic half-space).
+        dowel: transverse :class:`DowelLaw`; default elastic with stiffness E_host.
+        count: number of identical bars this anchor stands for across the width.
+        segment: largest bar element length [m]; default the median element size of the
+            block mesh.
+        name: label used in messages and output.
+    """
+
+    points: np.ndarray
+    diameter: float
+    steel: SteelLaw = field(default_factory=SteelLaw)
+    bond: BondLaw = field(default_factory=lambda: BondLaw.uniform(2e6, 2e-4))
+    bond_diameter: float | None = None
+    prestress: float = 0.0
+    plates: str = "none"
+    plate_stiffness: float | None = None
+    dowel: DowelLaw | None = None
+    count: float = 1.0
+    segment: float | None = None
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        p = np.array(self.points, dtype=float)
+        label = self.name or "anchor"
+        if p.ndim != 2 or p.shape[1] != 2 or p.shape[0] < 2:
+            raise ValueError(f"{label}: points must have shape (k, 2) with k >= 2, "
+                             f"got {np.shape(self.points)}")
+        if not np.all(np.isfinite(p)):
+            raise ValueError(f"{label}: points must be finite")
+        if np.any(np.linalg.norm(np.diff(p, axis=0), axis=1) <= 0):
+            raise ValueError(f"{label}: two consecutive points coincide")
+        object.__setattr__(self, "points", p)
+        _positive(f"{label}: diameter", self.diameter)
+        if self.bond_diameter is not None:
+            _positive(f"{label}: bond_diameter", self.bond_diameter)
+        _positive(f"{label}: prestress", self.prestress, allow_zero=True)
+        _positive(f"{label}: count", self.count)
+        if self.segment is not None:
+            _positive(f"{label}: segment", self.segment)
+        if self.plate_stiffness is not None:
+            _positive(f"{label}: plate_stiffness", self.plate_stiffness)
+        if self.plates not in _PLATES:
+            raise ValueError(f"{label}: plates must be one of {list(_PLATES)}, "
+                             f"got {self.plates!r}")
+        if not isinstance(self.steel, SteelLaw) or not isinstance(self.bond, BondLaw):
+            raise TypeError(f"{label}: steel must be a SteelLaw and bond a BondLaw")
+        if self.dowel is not None and not isinstance(self.dowel, DowelLaw):
+            raise TypeError(f"{label}: dowel must be a DowelLaw or None")
+        if self.prestress > 0:
+            if self.plates != "both":
+                raise ValueError(f"{label}: a prestressed anchor needs end plates at both "
+                                 f"ends (plates='both'), got plates={self.plates!r}")
+            if self.prestress >= self.steel.yield_stress * self.area:
+                raise ValueError(
+                    f"{label}: prestress {self.prestress:.4g} N reaches the yield force "
+                    f"{self.steel.yield_stress * self.area:.4g} N of the bar")
+
+    @property
+    def area(self) -> float:
+        """Steel area π d²/4 of one bar [m²]."""
+        return 0.25 * math.pi * self.diameter**2
+
+    @property
+    def perimeter(self) -> float:
+        """Bonded perimeter π d_b of one bar [m]."""
+        return math.pi * (self.bond_diameter or self.diameter)
+
+    @property
+    def length(self) -> float:
+        """Length of the polyline [m]."""
+        return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
+
+    @property
+    def yield_force(self) -> float:
+        """f_y A of one bar [N]."""
+        return self.steel.yield_stress * self.area
+
+
+def _in_triangles(tri: np.ndarray, q: np.ndarray, tol: float):
+    """Index of the first triangle of ``tri`` (k, 3, 2) holding ``q`` and its barycentric
+    coordinates, or (-1, None)."""
+    a, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    d = q - a
+    s = (d[:, 0] * e2[:, 1] - d[:, 1] * e2[:, 0]) / det
+    t = (e1[:, 0] * d[:, 1] - e1[:, 1] * d[:, 0]) / det
+    inside = np.flatnonzero((s >= -tol) & (t >= -tol) & (s + t <= 1.0 + tol))
+    if inside.size == 0:
+        return -1, None
+    k = inside[0]
+    w = np.clip(np.array([1.0 - s[k] - t[k], s[k], t[k]]), 0.0, None)
+    return int(k), w / w.sum()
+
+
+def _locate_in_block(blocks, b: int, q: np.ndarray, tol: float = 1e-6):
+    """Global cell of block ``b`` holding (or, within ``tol``, touching) point ``q`` and
+    its barycentric coordinates; the nearest cell if none does (a bar node on the
+    block's boundary)."""
+    c0, c1 = blocks.cell_offsets[b], blocks.cell_offsets[b + 1]
+    tri = blocks.x[blocks.cells[c0:c1]]
+    k, w = _in_triangles(tri, q, tol)
+    if k < 0:  # nearest centroid, coordinates clipped onto that triangle
+        k = int(np.argmin(np.linalg.norm(tri.mean(axis=1) - q, axis=1)))
+        _, w = _in_triangles(tri[k:k + 1], q, np.inf)
+    return c0 + k, w
+
+
+def _locate(blocks, pts: np.ndarray, tol: float = 1e-9):
+    """Global host cell (-1 if none) and barycentric coordinates of each point; a point
+    on the common edge of two blocks goes to the lower block id."""
+    n = pts.shape[0]
+    cell = np.full(n, -1, dtype=np.int64)
+    bary = np.zeros((n, 3))
+    bb = blocks.block_bounds
+    pad = tol * max(float(np.ptp(blocks.x, axis=0).max()), 1.0)
+    for i, q in enumerate(pts):
+        cand = np.flatnonzero((bb[:, 0] - pad <= q[0]) & (q[0] <= bb[:, 2] + pad)
+                              & (bb[:, 1] - pad <= q[1]) & (q[1] <= bb[:, 3] + pad))
+        for b in cand:
+            c0, c1 = blocks.cell_offsets[b], blocks.cell_offsets[b + 1]
+            tri = blocks.x[blocks.cells[c0:c1]]
+            a, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+            det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+            d = q - a
+            s = (d[:, 0] * e2[:, 1] - d[:, 1] * e2[:, 0]) / det
+            t = (e1[:, 0] * d[:, 1] - e1[:, 1] * d[:, 0]) / det
+            inside = np.flatnonzero((s >= -tol) & (t >= -tol) & (s + t <= 1.0 + tol))
+            if inside.size:
+                k = inside[0]
+                cell[i] = c0 + k
+                w = np.array([1.0 - s[k] - t[k], s[k], t[k]])
+                w = np.clip(w, 0.0, None)
+                bary[i] = w / w.sum()
+                break
+    return cell, bary
+
+
+def _boundary_crossings(blocks, p: np.ndarray, q: np.ndarray, seg: float) -> list[float]:
+    """Parameters t in (0, 1) of the forced bar nodes of the segment p→q.
+
+    Where the segment enters or leaves the masonry there is a node on the surface, so that
+    every bar element is wholly inside or wholly outside. Where it crosses a joint or a
+    crack (masonry on both sides) there is one bar element centred on the joint, so that
+    its halves bond to the blocks on either side and the bar bridges the opening.
+    Crossings closer than a fifth of a bar element to an earlier one or to an end are
+    dropped.
+    """
+    f = blocks.boundary_facets
+    a, b = blocks.x[f[:, 0]], blocks.x[f[:, 1]]
+    r = q - p
+    ell = float(np.linalg.norm(r))
+    e = b - a
+    den = r[0] * e[:, 1] - r[1] * e[:, 0]
+    ok = np.abs(den) > 1e-12 * ell * np.linalg.norm(e, axis=1)
+    w = a - p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / den
+        v = (w[:, 0] * r[1] - w[:, 1] * r[0]) / den
+    hit = ok & (t > 0) & (t < 1) & (v >= -1e-9) & (v <= 1 + 1e-9)
+    merge = 0.2 * seg / ell
+    ts: list[float] = []
+    for tt in np.sort(t[hit]):
+        if tt - (ts[-1] if ts else 0.0) >= merge and 1.0 - tt >= merge:
+            ts.append(float(tt))
+    eps = 1e-7
+    out: list[float] = []
+    for k, tt in enumerate(ts):
+        sides = _locate(blocks, np.array([p + (tt - eps) * r, p + (tt + eps) * r]))[0] >= 0
+        if sides[0] != sides[1]:
+            out.append(tt)
+            continue
+        lo = ts[k - 1] if k else 0.0
+        hi = ts[k + 1] if k + 1 < len(ts) else 1.0
+        half = min(0.5 * seg / ell, 0.45 * (tt - lo), 0.45 * (hi - tt))
+        out += [tt - half, tt + half]
+    return out
+
+
+class Anchors:
+    """The anchors of a model: bar elements, their nodes and their ties to the blocks.
+
+    Args:
+        model: the :class:`~masonry_fdem.model.Model` whose blocks host the anchors.
+        anchors: the :class:`Anchor` definitions.
+
+    Raises:
+        ValueError: an anchor lies wholly outside the blocks, or only its end nodes are
+            inside (nothing to bond to), or a definition is invalid.
+
+    Pass it to a solver as ``anchors=``: ``ExplicitSolver(model, anchors=a)`` advances the
+    bar nodes with the blocks; ``DynamicRelaxation(model, anchors=a)`` makes them unknowns
+    of the equilibrium iteration, and commits their bond and steel state at converged
+    increments only.
+    """
+
+    def __init__(self, model, anchors: Sequence[Anchor]):
+        anchors = list(anchors) if not isinstance(anchors, Anchor) else [anchors]
+        if not anchors:
+            raise ValueError("no anchors given")
+        for a in anchors:
+            if not isinstance(a, Anchor):
+                raise TypeError(f"expected Anchor objects, got {type(a).__name__}")
+        self.model = model
+        self.comm = model.comm
+        self.anchors = anchors
+        blocks = model.blocks
+        h_med = float(np.median(np.sqrt(2.0 * blocks.cell_area)))
+        # ---- discretise
+        xs, conn, elem_anchor, node_anchor = [], [], [], []
+        laws, law_index = [], {}
+        n0 = 0
+        self.anchor_nodes: list[np.ndarray] = []
+        self.anchor_elements: list[np.ndarray] = []
+        for k, a in enumerate(anchors):
+            seg = a.segment or h_med
+            pts = [a.points[0]]
+            for p, q in zip(a.points[:-1], a.points[1:], strict=True):
+                # nodes where the anchor crosses a block boundary (enters or leaves the
+                # masonry, crosses a joint), so that every bar element lies in one block
+                # or outside all of them
+                cuts = [0.0, *_boundary_crossings(blocks, p, q, seg), 1.0]
+                for t0, t1 in zip(cuts[:-1], cuts[1:], strict=True):
+                    m = max(1, math.ceil(np.linalg.norm(q - p) * (t1 - t0) / seg - 1e-9))
+                    for j in range(1, m + 1):
+                        pts.append(p + (q - p) * (t0 + (t1 - t0) * j / m))
+            pts = np.array(pts)
+            nn = pts.shape[0]
+            xs.append(pts)
+            conn.append(np.c_[np.arange(nn - 1), np.arange(1, nn)] + n0)
+            self.anchor_nodes.append(np.arange(n0, n0 + nn))
+            e0 = sum(c.shape[0] for c in conn[:-1])
+            self.anchor_elements.append(np.arange(e0, e0 + nn - 1))
+            elem_anchor += [k] * (nn - 1)
+            node_anchor += [k] * nn
+            if a.bond not in law_index:
+                law_index[a.bond] = len(laws)
+                laws.append(a.bond)
+            n0 += nn
+        self.x = np.ascontiguousarray(np.vstack(xs))
+        self.conn = np.ascontiguousarray(np.vstack(conn), dtype=np.int64)
+        self.elem_anchor = np.array(elem_anchor, dtype=np.int64)
+        self.node_anchor = np.array(node_anchor, dtype=np.int64)
+        n, ne = self.x.shape[0], self.conn.shape[0]
+        self.n, self.n_elements = n, ne
+        self.L0 = np.linalg.norm(self.x[self.conn[:, 1]] - self.x[self.conn[:, 0]], axis=1)
+        trib = np.zeros(n)  # tributary length (mass)
+        np.add.at(trib, self.conn[:, 0], 0.5 * self.L0)
+        np.add.at(trib, self.conn[:, 1], 0.5 * self.L0)
+        # ---- bond points: the halves of the bar elements that lie in a block, each hosted
+        # by that block (the two halves of an element bridging a joint bond to the blocks
+        # on either side)
+        xa, xb = self.x[self.conn[:, 0]], self.x[self.conn[:, 1]]
+        quarter = np.vstack([0.75 * xa + 0.25 * xb, 0.25 * xa + 0.75 * xb])
+        qcell, _ = _locate(blocks, quarter)
+        qblock = np.where(qcell >= 0, blocks.cell_block[np.maximum(qcell, 0)], -1)
+        half_block = qblock.reshape(2, ne).T  # (element, side)
+        self.bonded_element = np.any(half_block >= 0, axis=1)
+        for k, a in enumerate(anchors):
+            if not self.bonded_element[self.anchor_elements[k]].any():
+                raise ValueError(f"{a.name or f'anchor {k}'} lies wholly outside the blocks")
+        he, hs = np.nonzero(half_block >= 0)
+        self.helem = he.astype(np.int64)
+        self.hnode = self.conn[he, hs].astype(np.int64)
+        nh = self.hnode.size
+        self.n_bond = nh
+        hblock = half_block[he, hs]
+        gcell = np.empty(nh, dtype=np.int64)
+        bary = np.empty((nh, 3))
+        for h in range(nh):
+            gcell[h], bary[h] = _locate_in_block(blocks, int(hblock[h]), self.x[self.hnode[h]])
+        self.host_block = hblock
+        inv = np.full(blocks.n_nodes, -1, dtype=np.int64)
+        inv[model.node_input] = np.arange(model.n_nodes)
+        rank = self.comm.rank
+        block_rank = model.block_ranks()
+        self.hosts = np.full((nh, 3), -1, dtype=np.int64)
+        self.hw = np.zeros((nh, 3))
+        local = block_rank[hblock] == rank
+        for h in np.flatnonzero(local):
+            self.hosts[h] = inv[blocks.cells[gcell[h]]]
+            self.hw[h] = bary[h]
+        if np.any(self.hosts[local] < 0):
+            raise RuntimeError("an anchor host node is missing on its owner rank")
+        self.local = local
+        mats = blocks.material_names
+        e_host = np.array([model.materials[mats[blocks.cell_material[c]]].E for c in gcell])
+        # ---- element and bond-point properties
+        self.ep = np.zeros((ne, AK.N_EP))
+        self.count_e = np.zeros(ne)
+        for e in range(ne):
+            a = anchors[self.elem_anchor[e]]
+            self.ep[e] = (a.count * a.area, a.steel.E, a.steel.yield_stress,
+                          a.steel.hardening, a.steel.rupture_strain, a.count * a.prestress)
+            self.count_e[e] = a.count
+        self.jacking = np.array([anchors[k].prestress > 0 for k in self.elem_anchor],
+                                dtype=np.int8)
+        self.mass = np.zeros(2 * n)
+        for i in range(n):
+            a = anchors[self.node_anchor[i]]
+            self.mass[2 * i:2 * i + 2] = a.steel.density * a.area * a.count * trib[i]
+        self.npr = np.zeros((nh, AK.N_NP))
+        for h in range(nh):
+            k = self.elem_anchor[self.helem[h]]
+            a = anchors[k]
+            ell = 0.5 * self.L0[self.helem[h]]
+            row = self.npr[h]
+            row[AK.NP_LAW] = law_index[a.bond]
+            row[AK.NP_BONDED] = 0.0 if a.prestress > 0 else 1.0
+            row[AK.NP_BOND] = a.count * a.perimeter * ell
+            dowel = a.dowel or DowelLaw(stiffness=e_host[h])
+            row[AK.NP_KT] = a.count * dowel.stiffness * ell
+            row[AK.NP_QY] = a.count * dowel.strength * ell
+            start, end = _PLATES[a.plates]
+            nodes = self.anchor_nodes[k]
+            i = self.hnode[h]
+            side = start if i == nodes[0] else (-end if i == nodes[-1] else 0)
+            if side:
+                row[AK.NP_PLATE] = side
+                row[AK.NP_KP] = a.count * (a.plate_stiffness or e_host[h] * 0.1)
+        for k, a in enumerate(anchors):
+            start, end = _PLATES[a.plates]
+            elems = self.anchor_elements[k]
+            for flag, e, side, where in ((start, elems[0], 0, "start"),
+                                         (end, elems[-1], 1, "end")):
+                if flag and half_block[e, side] < 0:
+                    raise ValueError(f"{a.name or f'anchor {k}'}: its {where} plate is "
+                                     "outside the blocks")
+        kmax = max(len(b.slip) for b in laws)
+        self.laws_s = np.zeros((len(laws), kmax))
+        self.laws_t = np.zeros((len(laws), kmax))
+        self.laws_n = np.array([len(b.slip) for b in laws], dtype=np.int64)
+        self.laws_k0 = np.array([b.k0 for b in laws])
+        for j, b in enumerate(laws):
+            self.laws_s[j, :len(b.slip)] = b.slip
+            self.laws_t[j, :len(b.slip)] = b.stress
+        # ---- state
+        self.u = np.zeros(2 * n)
+        self.v = np.zeros(2 * n)
+        self.f = np.zeros(2 * n)
+        self._fbond = np.zeros(2 * n)
+        self.es = np.zeros((ne, AK.N_ES))
+        self.et = np.zeros((ne, AK.N_ES))
+        self.ns = np.zeros((nh, AK.N_NS))
+        self.nt = np.zeros((nh, AK.N_NS))
+        self.dref = np.zeros((nh, 2))
+        self.axial = np.zeros(ne)
+        self.strain = np.zeros(ne)
+        self.bond_out = np.zeros((nh, AK.N_NO))
+        self.presc = np.zeros(2 * n, dtype=np.int8)
+        self.vp = np.zeros(2 * n)
+        self.reaction = np.zeros(2 * n)
+        self.prescriptions: dict[str, np.ndarray] = {}
+        self.kinetic = 0.0
+        # ---- stiffness bounds (row sums of |K|) for time steps and DR masses
+        k_h = self.npr[:, AK.NP_BOND] * self.laws_k0[self.npr[:, AK.NP_LAW].astype(int)]
+        k_h += self.npr[:, AK.NP_KT] + self.npr[:, AK.NP_KP]
+        rows = np.zeros(n)
+        ke = self.ep[:, AK.EP_E] * self.ep[:, AK.EP_AREA] / self.L0
+        np.add.at(rows, self.conn[:, 0], 2.0 * _DIR * ke)
+        np.add.at(rows, self.conn[:, 1], 2.0 * _DIR * ke)
+        np.add.at(rows, self.hnode, 2.0 * _DIR * k_h)
+        self.rowsum = np.repeat(rows, 2)
+        self.host_rowsum = np.zeros_like(model.f_int)
+        for h in np.flatnonzero(local):
+            for j, w in zip(self.hosts[h], self.hw[h], strict=True):
+                self.host_rowsum[2 * j:2 * j + 2] += 2.0 * _DIR * k_h[h] * w
+
+    # ------------------------------------------------------------------ set-up
+    def prescribe(self, name: str, anchor: int = 0, node: str | int = "end",
+                  velocity: Sequence[float] = (0.0, 0.0)) -> None:
+        """Prescribe the motion of one anchor node (e.g. the pulled end of a pull-out test).
+
+        Args:
+            name: name of the prescription (for ``DynamicRelaxation.solve(displacement=
+                {name: (ux, uy)})`` and :meth:`reactions`); must not clash with the model's.
+            anchor: index of the anchor.
+            node: "start", "end" or the index of the node along the anchor.
+            velocity: prescribed velocity (vx, vy) [m/s] in explicit runs.
+        """
+        if name in self.prescriptions or name in {p.name for p in self.model.prescriptions}:
+            raise ValueError(f"a prescription named {name!r} exists already")
+        if not 0 <= anchor < len(self.anchors):
+            raise ValueError(f"anchor index {anchor} out of range 0..{len(self.anchors) - 1}")
+        nodes = self.anchor_nodes[anchor]
+        if node == "start":
+            i = nodes[0]
+        elif node == "end":
+            i = nodes[-1]
+        elif isinstance(node, int | np.integer) and 0 <= node < nodes.size:
+            i = nodes[node]
+        else:
+            raise ValueError(f"node must be 'start', 'end' or 0..{nodes.size - 1}, got {node!r}")
+        dofs = np.array([2 * i, 2 * i + 1])
+        self.presc[dofs] = 1
+        self.vp[dofs] = np.asarray(velocity, dtype=float)
+        self.prescriptions[name] = dofs
+
+    def set_displacement(self, name: str, value: Sequence[float | None]) -> None:
+        """Set the prescribed node of ``name`` to total displacement (ux, uy) [m]."""
+        dofs = self.prescriptions[name]
+        if len(value) != 2:
+            raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
+        for c in (0, 1):
+            if value[c] is not None:
+                self.u[dofs[c]] = float(value[c])
+
+    # ------------------------------------------------------------------ interaction API
+    def stable_omega2(self) -> float:
+        """Bound of ω² [1/s²] the anchors add (Gershgorin on M⁻¹K of their springs, at the
+        bar nodes and at the host nodes), global."""
+        w2 = float(np.max(self.rowsum / self.mass))
+        free = self.host_rowsum > 0
+        if free.any():
+            w2 = max(w2, float(np.max(self.host_rowsum[free] / self.model.mass[free])))
+        return self.comm.allreduce(w2, op=MPI.MAX)
+
+    def stiffness_rowsum(self) -> np.ndarray:
+        """Σ_j |K_ij| [N/m] the anchors add to each local block dof."""
+        return self.host_rowsum
+
+    def update_neighbours(self, v: np.ndarray, dt: float) -> None:
+        """Nothing to do: the hosts are fixed at set-up."""
+
+    def add_forces(self, f: np.ndarray, v: np.ndarray, dt: float, damping: bool = True) -> None:
+        """Bond, dowel and plate forces on the local host nodes into ``f`` (+=); the total
+        force on every bar node into ``self.f`` (collective)."""
+        self._fbond.fill(0.0)
+        AK.bond_forces(self.x, self.u, self.model.u.x.array, self.conn, self.hnode,
+                       self.helem, self.hosts, self.hw, self.npr, self.laws_s, self.laws_t,
+                       self.laws_n, self.laws_k0, self.dref, self.ns, self.nt, self.bond_out,
+                       self._fbond, f)
+        if self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, self._fbond, op=MPI.SUM)
+        self.f[:] = self._fbond
+        AK.bar_forces(self.x, self.u, self.conn, self.L0, self.ep, self.jacking, self.es,
+                      self.et, self.axial, self.strain, self.f)
+
+    def commit(self) -> None:
+        """Accept the trial bond and steel state."""
+        self.es[:] = self.et
+        self.ns[:] = self.nt
+
+    def advance(self, dt: float, damping: float = 0.0) -> None:
+        """One central-difference step of the bar nodes with ``self.f``."""
+        self.kinetic = AK.anchor_step(self.u, self.v, self.f, self.mass, self.presc,
+                                      self.vp, damping, dt, self.reaction)
+
+    def lock_off(self) -> None:
+        """Lock the jacked anchors off at their prestress and grout them (collective).
+
+        Every jacking bar element keeps force P at its current length (its stress-free
+        length is set accordingly) and the bond starts to act, with slip measured from
+        the current position. Call it once the structure is in equilibrium under the
+        jacking forces.
+        """
+        jack = np.flatnonzero(self.jacking)
+        if jack.size == 0:
+            return
+        xa = self.x + self.u.reshape(-1, 2)
+        ell = np.linalg.norm(xa[self.conn[jack, 1]] - xa[self.conn[jack, 0]], axis=1)
+        eps = (ell - self.L0[jack]) / self.L0[jack]
+        sig = self.ep[jack, AK.EP_JACK] / self.ep[jack, AK.EP_AREA]
+        self.es[jack, AK.ES_EPSP] = eps - sig / self.ep[jack, AK.EP_E]
+        self.et[jack] = self.es[jack]
+        self.jacking[jack] = 0
+        pts = np.flatnonzero(np.isin(self.helem, jack))
+        d = np.zeros((self.n_bond, 2))
+        AK.relative_displacements(self.u, self.model.u.x.array, self.hnode, self.hosts,
+                                  self.hw, d)
+        self.dref[pts] = d[pts]
+        self.npr[pts, AK.NP_BONDED] = 1.0
+
+    def reset(self) -> None:
+        """Back to the unloaded, unjacked state."""
+        for arr in (self.u, self.v, self.f, self.es, self.et, self.ns, self.nt, self.dref,
+                    self.axial, self.strain, self.bond_out, self.reaction):
+            arr[...] = 0.0
+        self.jacking[:] = [self.anchors[k].prestress > 0 for k in self.elem_anchor]
+        self.npr[:, AK.NP_BONDED] = 1.0 - self.jacking[self.helem]
+
+    # ------------------------------------------------------------------ results
+    def reactions(self) -> dict[str, np.ndarray]:
+        """Force (Fx, Fy) [N] each anchor prescription applies to its node (the pull).
+
+        Valid after a converged DR solve (then −f) or an explicit step (support force)."""
+        return {name: self._reaction(dofs) for name, dofs in self.prescriptions.items()}
+
+    def _reaction(self, dofs) -> np.ndarray:
+        return -self.f[dofs].copy()
+
+    def axial_force(self) -> np.ndarray:
+        """Axial force of each bar element [N] per bar (tension positive)."""
+        return self.axial / self.count_e
+
+    def stress(self) -> np.ndarray:
+        """Axial stress [Pa] of each bar element."""
+        return self.axial / self.ep[:, AK.EP_AREA]
+
+    def plastic_strain(self) -> np.ndarray:
+        """Committed plastic strain of each bar element."""
+        return self.es[:, AK.ES_EPSP].copy()
+
+    def ruptured(self) -> np.ndarray:
+        """Committed rupture flag of each bar element."""
+        return self.es[:, AK.ES_RUPT] > 0.5
+
+    def bond_results(self) -> dict[str, np.ndarray]:
+        """Per bond point (half of a bonded bar element; collective): "node" (its bar
+        node), "element", "slip" [m], "bond_stress" [Pa], "transverse" [m],
+        "transverse_force" [N per bar], "plate_force" [N per bar]."""
+        out = self.bond_out.copy()
+        if self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        count = self.count_e[self.helem]
+        return {
+            "node": self.hnode, "element": self.helem,
+            "slip": out[:, AK.NO_SLIP],
+            "bond_stress": out[:, AK.NO_TAU],
+            "transverse": out[:, AK.NO_W],
+            "transverse_force": out[:, AK.NO_Q] / count,
+            "plate_force": out[:, AK.NO_PLATE] / count,
+        }
+
+    def node_results(self) -> dict[str, np.ndarray]:
+        """Per bar node (collective): "slip" [m] and "bond_stress" [Pa] (means over the
+        node's bond points; 0 at a free node), "position" [m] (current), "bonded"."""
+        b = self.bond_results()
+        w = np.zeros(self.n)
+        np.add.at(w, b["node"], 1.0)
+        out = {"position": self.x + self.u.reshape(-1, 2), "bonded": w > 0}
+        for key in ("slip", "bond_stress"):
+            acc = np.zeros(self.n)
+            np.add.at(acc, b["node"], b[key])
+            out[key] = np.where(w > 0, acc / np.maximum(w, 1), 0.0)
+        return out
+
+    def summary(self) -> dict[str, float]:
+        """Scalars for a history row (collective): largest bar force [N] and |slip| [m],
+        number of yielded and of ruptured bar elements."""
+        res = self.node_results()
+        return {
+            "anchor_force_max": float(np.max(self.axial_force())),
+            "anchor_slip_max": float(np.max(np.abs(res["slip"]))),
+            "anchor_elements_yielded": float(np.count_nonzero(self.es[:, AK.ES_ALPHA] > 0)),
+            "anchor_elements_ruptured": float(np.count_nonzero(self.ruptured())),
+        }
+
+    def segments(self, scale: float = 1.0) -> np.ndarray:
+        """(n_elements, 2, 2) end points of the bar elements, displaced ×scale [m]."""
+        xa = self.x + scale * self.u.reshape(-1, 2)
+        return np.stack([xa[self.conn[:, 0]], xa[self.conn[:, 1]]], axis=1)
+
+    @property
+    def total_length(self) -> float:
+        """Σ count × length of the anchors [m] (the metres of anchor installed)."""
+        return float(sum(a.count * a.length for a in self.anchors))
+
+    def __repr__(self) -> str:
+        return (f"Anchors({len(self.anchors)} anchors, {self.n} nodes, "
+                f"{self.n_elements} bar elements, {self.total_length:.3g} m)")
+
+
+# ---------------------------------------------------------------------- layouts
+def straight_anchor(start: Sequence[float], end: Sequence[float], diameter: float,
+                    **kw) -> Anchor:
+    """A straight anchor from ``start`` to ``end`` [m] (other arguments as :class:`Anchor`)."""
+    return Anchor(np.array([start, end], dtype=float), diameter, **kw)
+
+
+def _arch_geometry(kind, span, rise):
+    from masonry_fdem.geometry.arches import ArchKind, arch_curve
+
+    kind = ArchKind(kind)
+    if kind is ArchKind.POINTED:
+        raise ValueError("angle-based anchor layouts need a circular (semicircular or "
+                         "segmental) arch")
+    half = 0.5 * span
+    if kind is ArchKind.SEMICIRCULAR:
+        radius, yc, alpha = half, 0.0, 0.5 * math.pi
+    else:
+        radius = (half * half + rise * rise) / (2.0 * rise)
+        yc, alpha = rise - radius, math.asin(half / radius)
+    arch_curve(kind, span, rise)  # validates span and rise
+    return radius, yc, alpha
+
+
+def radial_anchors(
+    angles: Sequence[float],
+    *,
+    span: float,
+    ring_thickness: float,
+    rings: int = 1,
+    kind: str = "semicircular",
+    rise: float | None = None,
+    origin: Sequence[float] = (0.0, 0.0),
+    cover: float = 0.02,
+    diameter: float,
+    **kw,
+) -> list[Anchor]:
+    """Radial anchors through all rings of a circular arch, one per angle.
+
+    Args:
+        angles: polar angles [degrees] of the anchors about the intrados centre (90: the
+            crown; 0/180: the springings of a semicircular arch).
+        span, ring_thickness, rings, kind, rise, origin: the arch, as in
+            :func:`~masonry_fdem.geometry.arch_layout`.
+        cover: distance [m] from the intrados and from the extrados to the anchor ends.
+        diameter: bar diameter [m]; other keywords go to :class:`Anchor`.
+
+    Raises:
+        ValueError: an angle outside the arch, or a cover leaving no anchor.
+    """
+    radius, yc, alpha = _arch_geometry(kind, span, rise)
+    depth = rings * ring_thickness
+    if not 0 <= cover < 0.5 * depth:
+        raise ValueError(f"cover must be in [0, {0.5 * depth:g}) m, got {cover}")
+    lo, hi = 90.0 - math.degrees(alpha), 90.0 + math.degrees(alpha)
+    out = []
+    o = np.asarray(origin, dtype=float)
+    name = kw.pop("name", "radial")
+    for k, ang in enumerate(angles):
+        if not lo - 1e-9 <= ang <= hi + 1e-9:
+            raise ValueError(f"anchor angle {ang} deg is outside the arch ({lo:g}..{hi:g} deg)")
+        th = math.radians(ang)
+        e = np.array([math.cos(th), math.sin(th)])
+        c = o + np.array([0.0, yc])
+        p0 = c + (radius + cover) * e
+        p1 = c + (radius + depth - cover) * e
+        out.append(Anchor(np.array([p0, p1]), diameter, name=f"{name}:{k}", **kw))
+    return out
+
+
+def intrados_stitch(
+    start_angle: float,
+    end_angle: float,
+    *,
+    span: float,
+    depth: float,
+    kind: str = "semicircular",
+    rise: float | None = None,
+    origin: Sequence[float] = (0.0, 0.0),
+    pieces: int | None = None,
+    diameter: float,
+    **kw,
+) -> Anchor:
+    """A curved stitch following the intrados at ``depth`` [m] above it, from
+    ``start_angle`` to ``end_angle`` (polar angles in degrees about the intrados centre,
+    90 = crown). The arc is a polyline of ``pieces`` chords (default one per 5°)."""
+    radius, yc, alpha = _arch_geometry(kind, span, rise)
+    lo, hi = 90.0 - math.degrees(alpha), 90.0 + math.degrees(alpha)
+    for ang in (start_angle, end_angle):
+        if not lo - 1e-9 <= ang <= hi + 1e-9:
+            raise ValueError(f"stitch angle {ang} deg is outside the arch ({lo:g}..{hi:g} deg)")
+    if start_angle == end_angle:
+        raise ValueError("a stitch needs start_angle != end_angle")
+    _positive("stitch depth", depth)
+    if pieces is None:
+        pieces = max(2, math.ceil(abs(end_angle - start_angle) / 5.0))
+    th = np.radians(np.linspace(start_angle, end_angle, pieces + 1))
+    r = radius + depth
+    c = np.asarray(origin, dtype=float) + np.array([0.0, yc])
+    pts = c + r * np.c_[np.cos(th), np.sin(th)]
+    return Anchor(pts, diameter, name=kw.pop("name", "stitch"), **kw)
+
+
+def wall_ties(
+    positions: Sequence[float],
+    *,
+    extent: tuple[float, float],
+    direction: str = "vertical",
+    diameter: float,
+    **kw,
+) -> list[Anchor]:
+    """Straight ties across a wall's joints.
+
+    Args:
+        positions: x [m] of vertical ties (across the bed joints), or y [m] of horizontal
+            ties (across the head joints).
+        extent: (from, to) [m]: the y range of vertical ties, the x range of horizontal ones.
+        direction: "vertical" or "horizontal".
+        diameter: bar diameter [m]; other keywords go to :class:`Anchor`.
+    """
+    if direction not in ("vertical", "horizontal"):
+        raise ValueError(f"direction must be 'vertical' or 'horizontal', got {direction!r}")
+    a, b = (float(v) for v in extent)
+    if not b > a:
+        raise ValueError(f"extent must be (from, to) with to > from, got {extent}")
+    name = kw.pop("name", "tie")
+    out = []
+    for k, p in enumerate(positions):
+        pts = [[p, a], [p, b]] if direction == "vertical" else [[a, p], [b, p]]
+        out.append(Anchor(np.array(pts, dtype=float), diameter, name=f"{name}:{k}", **kw))
+    return out
