@@ -123,10 +123,15 @@ def bar_forces(xa, ua, conn, L0, ep, jacking, es, et, axial, strain, fa):
     for e in range(conn.shape[0]):
         a = conn[e, 0]
         b = conn[e, 1]
-        dx = xa[b, 0] + ua[2 * b] - xa[a, 0] - ua[2 * a]
-        dy = xa[b, 1] + ua[2 * b + 1] - xa[a, 1] - ua[2 * a + 1]
+        X0 = xa[b, 0] - xa[a, 0]
+        Y0 = xa[b, 1] - xa[a, 1]
+        du = ua[2 * b] - ua[2 * a]
+        dv = ua[2 * b + 1] - ua[2 * a + 1]
+        dx = X0 + du
+        dy = Y0 + dv
         ell = math.sqrt(dx * dx + dy * dy)
-        eps = (ell - L0[e]) / L0[e]
+        # ℓ − L0 = (ℓ² − L0²)/(ℓ + L0), free of the cancellation of ℓ − L0 for a stiff bar
+        eps = (2.0 * (X0 * du + Y0 * dv) + du * du + dv * dv) / ((ell + L0[e]) * L0[e])
         strain[e] = eps
         if jacking[e]:
             n = ep[e, EP_JACK]

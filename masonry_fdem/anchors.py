@@ -674,9 +674,12 @@ class Anchors:
         jack = np.flatnonzero(self.jacking)
         if jack.size == 0:
             return
-        xa = self.x + self.u.reshape(-1, 2)
-        ell = np.linalg.norm(xa[self.conn[jack, 1]] - xa[self.conn[jack, 0]], axis=1)
-        eps = (ell - self.L0[jack]) / self.L0[jack]
+        ua = self.u.reshape(-1, 2)
+        dX = self.x[self.conn[jack, 1]] - self.x[self.conn[jack, 0]]
+        du = ua[self.conn[jack, 1]] - ua[self.conn[jack, 0]]
+        ell = np.linalg.norm(dX + du, axis=1)
+        L0 = self.L0[jack]
+        eps = (2.0 * (dX * du).sum(axis=1) + (du * du).sum(axis=1)) / ((ell + L0) * L0)
         sig = self.ep[jack, AK.EP_JACK] / self.ep[jack, AK.EP_AREA]
         self.es[jack, AK.ES_EPSP] = eps - sig / self.ep[jack, AK.EP_E]
         self.et[jack] = self.es[jack]

@@ -12,8 +12,8 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-
 from conftest import alternating_grid
+
 from masonry_fdem import Material, Model
 from masonry_fdem.anchors import (
     Anchor,
@@ -21,8 +21,8 @@ from masonry_fdem.anchors import (
     BondLaw,
     DowelLaw,
     SteelLaw,
-    radial_anchors,
     intrados_stitch,
+    radial_anchors,
     straight_anchor,
     wall_ties,
 )
@@ -246,3 +246,229 @@ def test_prestressed_anchor_puts_the_blocks_in_compression():
           f"{locked:.3f} N after lock-off; bar {anchors.axial_force().min():.3f} N")
     assert locked == pytest.approx(P, rel=0.01)
     assert np.allclose(anchors.axial_force(), P, rtol=0.01)
+
+
+def _tied_pier(comm):
+    """A pier of four blocks (0.3 × 0.15 m) on a fixed base with dry frictional joints,
+    a vertical tie (bonded, 16 mm, with a dowel law) through the courses and a lateral
+    load at the top; gravity. Solved by DR in two increments, then shaken by an
+    explicit run (the lateral load removed)."""
+    from masonry_fdem.contact import BlockContact, ContactSettings
+
+    boxes = [(0.0, -0.1, 0.3, 0.0)] + [(0.0, 0.15 * k, 0.3, 0.15 * (k + 1)) for k in range(4)]
+    blocks = grid_blocks(boxes, 0.05)
+    model = Model(blocks, {"brick": BRICK}, width=0.3, comm=comm)
+    model.fix_blocks("block:0", name="base")
+    model.add_gravity()
+    model.add_point_load((0.0, 0.6), (800.0, 0.0), live=True)
+    contact = BlockContact(model, ContactSettings(friction=0.7))
+    steel = SteelLaw(E=200e9, yield_stress=500e6, hardening=1e9, rupture_strain=0.1)
+    bond = BondLaw((1e-4, 1e-3, 3e-3), (2e6, 2e6, 0.2e6))
+    tie = wall_ties([0.21], extent=(-0.08, 0.58), diameter=0.016, steel=steel, bond=bond,
+                    dowel=DowelLaw(stiffness=2e9, strength=2e5), segment=0.05)
+    anchors = Anchors(model, tie)
+    dr = DynamicRelaxation(model, contact=contact, anchors=anchors, rtol=1e-7)
+    out = []
+    for lf in (0.5, 1.0):
+        assert dr.solve(lf).converged
+        out.append((model.displacement().copy(), anchors.axial_force().copy(),
+                    anchors.node_results()["slip"].copy(), dr.reactions()["base"].copy()))
+    ex = ExplicitSolver(model, contact=contact, anchors=anchors, damping=20.0)
+    ex.run(steps=300)
+    out.append((model.displacement().copy(), anchors.axial_force().copy(),
+                anchors.node_results()["slip"].copy(), ex.reactions()["base"].copy()))
+    hosts = set(model.block_ranks()[anchors.host_block].tolist())
+    return out, hosts
+
+
+def test_anchors_same_on_any_number_of_ranks():
+    """The tied pier on all ranks (blocks, and so the tie's hosts, split between them
+    under mpirun) equals the same model on one rank to 1e-10 (relative to the largest
+    value of each quantity)."""
+    world, hosts = _tied_pier(MPI.COMM_WORLD)
+    alone, _ = _tied_pier(MPI.COMM_SELF)
+    if MPI.COMM_WORLD.size > 1:
+        assert len(hosts) > 1  # the tie crosses a rank boundary
+    worst = 0.0
+    for a, b in zip(world, alone, strict=True):
+        for qa, qb in zip(a, b, strict=True):
+            worst = max(worst, float(np.abs(qa - qb).max() / np.abs(qb).max()))
+    forces = world[1][1]
+    print(f"\ntied pier, {MPI.COMM_WORLD.size} rank(s) vs 1: largest relative difference "
+          f"{worst:.2e}; tie force up to {forces.max():.1f} N")
+    assert forces.max() > 100.0  # the tie works
+    assert worst < 1e-10
+
+
+def _pull_model(comm=MPI.COMM_SELF):
+    blocks = grid_blocks([(0.0, 0.0, 0.3, 0.2)], 0.02)
+    model = Model(blocks, {"brick": BRICK}, width=0.2, comm=comm)
+    model.fix_blocks("block:0")
+    bond = BondLaw((2e-4, 1e-3, 3e-3), (3e6, 3e6, 0.5e6))
+    anchors = Anchors(model, [Anchor([[0.1, 0.1], [0.35, 0.1]], diameter=0.012, bond=bond)])
+    return model, anchors
+
+
+def test_explicit_pull_out_follows_the_quasi_static_curve():
+    """The short anchor pulled slowly (5 mm/s, 1/1000 of the bar's wave speed, light mass
+    damping) by the explicit solver carries the force dynamic relaxation finds at the
+    same end displacements (2 % of the peak): the bar nodes, bond and steel state are
+    advanced with the blocks."""
+    model, anchors = _pull_model()
+    anchors.prescribe("pull", 0, "end")
+    dr = DynamicRelaxation(model, anchors=anchors, rtol=1e-8)
+    marks = [1e-4, 3e-4, 6e-4]
+    static = []
+    for s in marks:
+        assert dr.solve(0.0, displacement={"pull": (s, 0.0)}).converged
+        static.append(dr.reactions()["pull"][0])
+    model2, anchors2 = _pull_model()
+    anchors2.prescribe("pull", 0, "end", velocity=(5e-3, 0.0))
+    ex = ExplicitSolver(model2, anchors=anchors2, damping=200.0)
+    dynamic = []
+    for s in marks:
+        ex.run(t_end=s / 5e-3)
+        dynamic.append(ex.reactions()["pull"][0])
+    peak = math.pi * 0.012 * 0.2 * 3e6
+    print(f"explicit vs DR pull-out [N]: {np.round(dynamic, 1).tolist()} vs "
+          f"{np.round(static, 1).tolist()} (dt = {ex.dt:.3g} s)")
+    assert np.max(np.abs(np.array(dynamic) - static)) < 0.02 * peak
+
+
+def test_anchor_output_history_and_picture(tmp_path):
+    """The ParaView file holds every bar element with its force and every node with its
+    slip; the history row and the picture are written."""
+    import xml.etree.ElementTree as ET
+
+    from masonry_fdem.io import AnchorOutput, History, plot_blocks
+
+    model, anchors = _pull_model(MPI.COMM_WORLD)
+    anchors.prescribe("pull", 0, "end")
+    dr = DynamicRelaxation(model, anchors=anchors, rtol=1e-8)
+    folder = tmp_path if MPI.COMM_WORLD.size == 1 else None
+    folder = MPI.COMM_WORLD.bcast(folder if folder is not None else tmp_path, root=0)
+    out = AnchorOutput(anchors, folder / "vtk")
+    hist = History(folder / "history.csv", comm=MPI.COMM_WORLD)
+    for k, s in enumerate([2e-4, 5e-4]):
+        assert dr.solve(0.0, displacement={"pull": (s, 0.0)}).converged
+        out.write(k)
+        hist.append({"slip": s, **anchors.summary()})
+    png = plot_blocks(model, folder / "anchors.png", anchors=anchors, scale=50.0)
+    hist.close()
+    if MPI.COMM_WORLD.rank == 0:
+        assert png.stat().st_size > 10_000
+        piece = ET.parse(folder / "vtk" / "anchors_00001.vtp").getroot().find(".//Piece")
+        assert int(piece.get("NumberOfLines")) == anchors.n_elements
+        assert int(piece.get("NumberOfPoints")) == anchors.n
+        names = {d.get("Name") for d in piece.iter("DataArray")}
+        assert {"axial_force", "slip", "bond_stress", "plastic_strain"} <= names
+        assert (folder / "vtk" / "anchors.pvd").read_text().count("<DataSet") == 2
+        assert hist.column("anchor_force_max")[-1] == pytest.approx(
+            anchors.axial_force().max())
+    assert anchors.summary()["anchor_slip_max"] > 4e-4
+
+
+def test_layout_helpers_place_anchors_through_the_rings():
+    """Radial anchors run along the radius from cover above the intrados to cover below
+    the extrados; a stitch follows the intrados at its depth; wall ties are straight."""
+    span, t, rings = 2.0, 0.1, 3
+    anchors = radial_anchors([30.0, 90.0, 150.0], span=span, ring_thickness=t, rings=rings,
+                             cover=0.02, diameter=0.016, origin=(1.0, 0.5))
+    assert [a.name for a in anchors] == ["radial:0", "radial:1", "radial:2"]
+    for a, ang in zip(anchors, [30.0, 90.0, 150.0], strict=True):
+        r = np.linalg.norm(a.points - [1.0, 0.5], axis=1)
+        assert r == pytest.approx([1.02, 1.28])
+        d = a.points[1] - a.points[0]
+        assert math.degrees(math.atan2(d[1], d[0])) == pytest.approx(ang)
+    seg = radial_anchors([60.0], span=4.0, rise=1.0, kind="segmental", ring_thickness=0.2,
+                         diameter=0.02)
+    R = (4.0 + 1.0) / 2.0  # (span²/4 + rise²)/(2 rise)
+    assert np.linalg.norm(seg[0].points[0] - [0.0, 1.0 - R]) == pytest.approx(R + 0.02)
+    st = intrados_stitch(45.0, 135.0, span=span, depth=0.05, diameter=0.012)
+    assert np.allclose(np.linalg.norm(st.points, axis=1), 1.05)
+    assert st.length == pytest.approx(1.05 * math.pi / 2, rel=2e-3)
+    ties = wall_ties([0.1, 0.5], extent=(0.0, 1.2), diameter=0.012)
+    assert ties[1].points.tolist() == [[0.5, 0.0], [0.5, 1.2]]
+    assert straight_anchor((0, 0), (1, 0), 0.01).length == 1.0
+    with pytest.raises(ValueError, match="outside the arch"):
+        radial_anchors([200.0], span=span, ring_thickness=t, diameter=0.016)
+    with pytest.raises(ValueError, match="cover"):
+        radial_anchors([90.0], span=span, ring_thickness=t, cover=0.06, diameter=0.016)
+
+
+def test_radial_anchor_in_a_meshed_arch_is_cut_at_every_ring_interface():
+    """A radial anchor through a three-ring arch gets one bar element centred on each
+    ring interface it crosses, so each side bonds to its own ring."""
+    from masonry_fdem.geometry import build_arch
+
+    blocks = build_arch(span=2.0, ring_thickness=0.1, rings=3, voussoirs=12,
+                        mesh_size=0.05, comm=MPI.COMM_SELF)
+    model = Model(blocks, {"voussoir": BRICK}, width=1.0, comm=MPI.COMM_SELF)
+    (a,) = radial_anchors([80.0], span=2.0, ring_thickness=0.1, rings=3, cover=0.02,
+                          diameter=0.016)
+    anchors = Anchors(model, [a])
+    r = np.linalg.norm(anchors.x, axis=1)
+    mid = 0.5 * (r[anchors.conn[:, 0]] + r[anchors.conn[:, 1]])
+    bridging = [e for e in range(anchors.n_elements)
+                if len(set(anchors.host_block[anchors.helem == e].tolist())) == 2]
+    assert len(bridging) == 2
+    # the ring faces are chords of 30° voussoirs: within the sagitta r (1 − cos 15°)
+    assert mid[bridging] == pytest.approx([1.1, 1.2], abs=0.045)
+    rings = {int(blocks.block_names[b].split(":")[1]) for b in anchors.host_block}
+    assert rings == {0, 1, 2}
+    assert anchors.total_length == pytest.approx(0.26)
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"points": [[0, 0]]}, "shape"),
+    ({"diameter": -0.01}, "diameter"),
+    ({"prestress": 1e4}, "plates='both'"),
+    ({"prestress": 1e6, "plates": "both"}, "yield force"),
+    ({"plates": "middle"}, "plates must be one of"),
+    ({"points": [[0, 0], [0, 0], [1, 0]]}, "coincide"),
+])
+def test_bad_anchor_definitions_are_refused(kw, message):
+    args = {"points": [[0.1, 0.1], [0.2, 0.1]], "diameter": 0.012} | kw
+    with pytest.raises(ValueError, match=message):
+        Anchor(**args)
+
+
+def test_bad_laws_and_placements_are_refused():
+    with pytest.raises(ValueError, match="increasing"):
+        BondLaw((1e-3, 5e-4), (1e6, 2e6))
+    with pytest.raises(ValueError, match="steeper"):
+        BondLaw((1e-3, 1.1e-3), (1e6, 5e6))
+    with pytest.raises(ValueError, match="rupture_strain"):
+        SteelLaw(rupture_strain=1e-3)
+    with pytest.raises(ValueError, match="dowel stiffness"):
+        DowelLaw(stiffness=0.0)
+    blocks = grid_blocks([(0.0, 0.0, 0.3, 0.2)], 0.05)
+    model = Model(blocks, {"brick": BRICK}, comm=MPI.COMM_SELF)
+    with pytest.raises(ValueError, match="wholly outside"):
+        Anchors(model, [Anchor([[1.0, 1.0], [2.0, 1.0]], diameter=0.01)])
+    with pytest.raises(ValueError, match="end plate is outside"):
+        Anchors(model, [Anchor([[0.1, 0.1], [0.5, 0.1]], diameter=0.01, plates="both")])
+    anchors = Anchors(model, [Anchor([[0.1, 0.1], [0.2, 0.1]], diameter=0.01)])
+    anchors.prescribe("pull", 0, "end")
+    with pytest.raises(ValueError, match="exists already"):
+        anchors.prescribe("pull", 0, "start")
+    with pytest.raises(ValueError, match="out of range"):
+        anchors.prescribe("other", 3)
+
+
+def test_bond_law_return_unloads_with_plastic_slip():
+    """Kernel check: loading past the peak then unloading follows the initial stiffness
+    from the envelope point reached; reverse loading meets the envelope at −τ_env of
+    the accumulated slip."""
+    from masonry_fdem import _anchor_kernels as AK
+
+    law = BondLaw((1e-4, 1e-3, 2e-3), (2e6, 2e6, 0.5e6))
+    ls, lt = np.array(law.slip), np.array(law.stress)
+    res = np.zeros(3)
+    AK.bond_return(ls, lt, 3, law.k0, 1.5e-3, 0.0, 0.0, res)
+    tau, sp, kappa = res
+    assert tau == pytest.approx(float(law.envelope(1.5e-3)))  # on the softening branch
+    AK.bond_return(ls, lt, 3, law.k0, 1.4e-3, sp, kappa, res)
+    assert res[0] == pytest.approx(tau - law.k0 * 1e-4)  # elastic unloading
+    AK.bond_return(ls, lt, 3, law.k0, -5e-3, sp, kappa, res)
+    assert res[0] == pytest.approx(-0.5e6)  # the residual, reversed

@@ -25,6 +25,7 @@ def plot_blocks(
     show_edges: bool = False,
     joints=None,
     disks=None,
+    anchors=None,
 ) -> Path | None:
     """Draw the blocks in their deformed position, coloured by a field (collective).
 
@@ -42,6 +43,9 @@ def plot_blocks(
             crushed) — the crack pattern.
         disks: a :class:`~masonry_fdem.disks.Disks` set, drawn as grey circles with a
             radius line showing their rotation.
+        anchors: the :class:`~masonry_fdem.anchors.Anchors`, drawn as thick lines
+            coloured by their axial force per bar [N] (second colour bar); ruptured bar
+            elements are drawn dashed in grey.
 
     Returns:
         The path on rank 0, None on other ranks.
@@ -80,6 +84,10 @@ def plot_blocks(
     if joints is not None:
         jstate = joints.status()
         jseg = joints.segments(scale)
+    if anchors is not None:
+        aseg = anchors.segments(scale)
+        aforce = anchors.axial_force()
+        arupt = anchors.ruptured()
     if model.comm.rank != 0:
         return None
     import matplotlib
@@ -124,6 +132,14 @@ def plot_blocks(
                                          linewidths=0.3))
         ax.autoscale_view()
     fig.colorbar(pc, ax=ax, label=label, shrink=0.8)
+    if anchors is not None:
+        ok = ~arupt
+        lc = LineCollection(aseg[ok], array=aforce[ok] / 1e3, cmap="plasma", linewidths=2.5)
+        ax.add_collection(lc)
+        if arupt.any():
+            ax.add_collection(LineCollection(aseg[arupt], colors="0.5", linewidths=1.5,
+                                             linestyles="dashed"))
+        fig.colorbar(lc, ax=ax, label="anchor force [kN]", shrink=0.8, pad=0.02)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
