@@ -1,0 +1,616 @@
+"""Rigid-block limit analysis of masonry by linear programming (static, lower-bound form).
+
+The blocks of a :class:`~masonry_fdem.geometry.BlockLayout` are rigid; the joints between
+them carry no tension, have infinite compressive strength and Coulomb friction. The
+largest multiplier ``λ`` of a live load that the structure can carry together with its
+dead load is a linear programme (Livesley 1978; Gilbert & Melbourne 1994, the formulation
+of LimitState:RING):
+
+.. code-block:: text
+
+    maximise   λ
+    subject to B q + λ f_live = -f_dead        (equilibrium of every free block)
+               N_k >= 0                          (no tension at each interface end)
+               |S_k| <= μ N_k                    (Coulomb friction at each interface end)
+               0 <= λ <= λ_max
+
+Interfaces. :func:`find_interfaces` finds every straight segment shared by the outlines of
+two blocks ``a < b`` (indices in the layout). Its unit tangent ``t`` runs along the edge of
+``a`` (counter-clockwise around ``a``) from ``start`` to ``end``; its unit normal
+``n = (t_y, -t_x)`` points out of ``a`` into ``b``. Each interface carries a normal force
+``N_k`` and a shear force ``S_k`` at each of its two ends ``k = 1, 2``; block ``b`` receives
+``N_k n + S_k t`` at end ``k`` and block ``a`` the opposite. ``N_k >= 0`` is compression. With
+two non-negative end forces the resultant stays between the ends: a joint opens into a
+hinge at one end instead of carrying tension.
+
+Friction. For finite ``μ`` the end force is written as ``f+ (n + μ t) + f- (n - μ t)`` with
+``f+, f- >= 0`` (the two edges of the 2D friction cone), so ``N = f+ + f-`` and
+``S = μ (f+ - f-)``: the same constraints as above with no inequality rows, which the
+simplex solves in far fewer iterations. ``μ = inf`` leaves ``S`` free.
+
+Equilibrium. Unknowns are ``q = (N_1, S_1, N_2, S_2)`` per interface and ``λ``. Each block
+that is not a support gives three rows, the force components ``F_x, F_y`` and the moment
+``M`` (counter-clockwise positive) about its area centroid. Supports (abutments, bases) are
+fixed and give no row. Self-weight ``ρ · area · width · g`` acts downward at the centroid.
+
+Mechanism. The duals of the equilibrium rows are the virtual velocities ``(u, v, ω)`` of the
+blocks' centroids in the collapse mechanism (the kinematic, upper-bound problem is the dual
+of this one). They are scaled so that the fastest block vertex moves at speed 1 and the
+live load does positive work. Interfaces across which the two blocks move relative to each
+other are reported as hinges (relative rotation about one end), sliding (tangential
+relative velocity) or separation (opening without rotation or slip).
+
+Limitations. Friction is associative in the LP, so a sliding mechanism dilates; with
+several joints near sliding the load factor can exceed that of a non-associative
+(frictional, non-dilatant) analysis. Crushing is ignored (infinite compressive strength)
+and joints have no cohesion or tensile strength. Interfaces are found only between
+touching, non-overlapping outlines: the shared edges must be collinear within ``tol``.
+When several mechanisms share the collapse load (degenerate duals, common in multi-ring
+arches and walls) the one reported is the solver's basic solution, which may combine
+them. An infeasible LP (the dead load alone collapses the structure) reports no mechanism.
+
+Everything runs in serial on each rank: under MPI every rank solves the same small LP.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import logging
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import NamedTuple
+
+import numpy as np
+from scipy.optimize import linprog
+from scipy.sparse import coo_matrix
+from scipy.spatial import cKDTree
+
+from masonry_fdem.constants import G
+from masonry_fdem.geometry.layout import BlockLayout
+from masonry_fdem.geometry.polygons import polygon_area, polygon_centroid
+
+__all__ = [
+    "Hinge",
+    "HingeKind",
+    "Interfaces",
+    "LimitResult",
+    "LimitStatus",
+    "find_interfaces",
+    "limit_analysis",
+]
+
+log = logging.getLogger(__name__)
+
+# Relative velocity (the fastest vertex moves at 1) under which two blocks move together.
+_MOTION_TOL = 1e-6
+# λ within this relative distance of λ_max counts as "no mechanism below the cap".
+_CAP_TOL = 1e-9
+
+Load = tuple[Sequence[float], Sequence[float]]
+
+
+class LimitStatus(StrEnum):
+    """Outcome of :func:`limit_analysis`."""
+
+    COLLAPSE = "collapse"  # a mechanism forms at λ < max_load_factor
+    NO_MECHANISM = "no_mechanism"  # the structure carries max_load_factor times the live load
+    INFEASIBLE = "infeasible"  # no λ >= 0 is admissible: the dead load alone collapses it
+
+
+class HingeKind(StrEnum):
+    """Relative motion of two blocks at an interface of the mechanism."""
+
+    HINGE = "hinge"  # rotation about one end of the interface
+    SLIDING = "sliding"  # tangential relative velocity (with dilatancy, see module doc)
+    SEPARATION = "separation"  # the blocks move apart without rotating or sliding
+
+
+class Interfaces(NamedTuple):
+    """Straight contact segments between pairs of blocks (see the module doc for signs).
+
+    Attributes:
+        block_a: ``(n,)`` index of the first block (the lower index) in the layout.
+        block_b: ``(n,)`` index of the second block.
+        start: ``(n, 2)`` first end of each segment [m] (end 1).
+        end: ``(n, 2)`` second end of each segment [m] (end 2).
+    """
+
+    block_a: np.ndarray
+    block_b: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+
+    @property
+    def size(self) -> int:
+        """Number of interfaces."""
+        return int(self.block_a.shape[0])
+
+    @property
+    def length(self) -> np.ndarray:
+        """``(n,)`` segment lengths [m]."""
+        return np.linalg.norm(self.end - self.start, axis=1)
+
+    @property
+    def tangent(self) -> np.ndarray:
+        """``(n, 2)`` unit tangents, from ``start`` to ``end``."""
+        return (self.end - self.start) / self.length[:, None]
+
+    @property
+    def normal(self) -> np.ndarray:
+        """``(n, 2)`` unit normals, out of block ``a`` into block ``b``."""
+        t = self.tangent
+        return np.column_stack([t[:, 1], -t[:, 0]])
+
+
+@dataclass(frozen=True)
+class Hinge:
+    """An interface of the collapse mechanism.
+
+    Attributes:
+        interface: index into :attr:`LimitResult.interfaces`.
+        blocks: names of the two blocks ``(a, b)``.
+        position: ``(x, y)`` [m]: the end of the interface about which the blocks rotate
+            (hinge), or its midpoint (sliding, separation).
+        kind: relative motion.
+        magnitude: relative angular velocity ``|ω_b - ω_a|`` [1/m] (hinge), or relative
+            tangential (sliding) or normal (separation) velocity [-], on the scale where the
+            fastest vertex of the mechanism moves at speed 1.
+    """
+
+    interface: int
+    blocks: tuple[str, str]
+    position: tuple[float, float]
+    kind: HingeKind
+    magnitude: float
+
+
+@dataclass(frozen=True, eq=False)
+class LimitResult:
+    """Result of :func:`limit_analysis`.
+
+    Attributes:
+        load_factor: collapse load factor ``λ`` (multiplier of the live loads); ``λ_max``
+            for ``no_mechanism``, NaN for ``infeasible``.
+        status: "collapse", "no_mechanism" or "infeasible" (see :class:`LimitStatus`).
+        interface_forces: ``(n_int, 4)`` forces ``(N_1, S_1, N_2, S_2)`` [N] at the two ends
+            of each interface, in the equilibrium found at ``λ = load_factor`` (NaN if
+            infeasible); ``N >= 0`` is compression, ``S`` acts on block ``b`` along the
+            tangent.
+        hinges: interfaces with relative motion in the mechanism (empty unless collapse).
+        block_velocities: ``(n_blocks, 3)`` virtual velocities ``(u, v, ω)`` of the block
+            centroids in the mechanism (``[-], [-], [1/m]``, fastest vertex at speed 1; zero
+            for supports and unless collapse).
+        interfaces: the interfaces of the LP (those between two supports are left out).
+        names: block names, in layout order.
+        fixed: ``(n_blocks,)`` True for supports.
+    """
+
+    load_factor: float
+    status: LimitStatus
+    interface_forces: np.ndarray
+    hinges: list[Hinge]
+    block_velocities: np.ndarray
+    interfaces: Interfaces
+    names: tuple[str, ...]
+    fixed: np.ndarray
+
+    @property
+    def thrust_points(self) -> np.ndarray:
+        """``(n_int, 2)`` point of each interface where its resultant acts [m].
+
+        The points of the line of thrust; NaN where an interface carries no normal force.
+        """
+        n1, n2 = self.interface_forces[:, 0], self.interface_forces[:, 2]
+        total = n1 + n2
+        with np.errstate(invalid="ignore", divide="ignore"):
+            w = np.where(total > 0.0, n2 / total, np.nan)
+        return self.interfaces.start + w[:, None] * (self.interfaces.end - self.interfaces.start)
+
+
+def _layout_size(layout: BlockLayout) -> float:
+    b = layout.bounds
+    return float(max(b[2] - b[0], b[3] - b[1]))
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def find_interfaces(layout: BlockLayout, tol: float = 1e-9) -> Interfaces:
+    """Straight segments shared by the outlines of two blocks.
+
+    Two edges of different blocks touch if both ends of one lie within ``tol`` of the
+    other's line, they run in opposite directions (the blocks lie on opposite sides) and
+    their projections overlap by more than ``tol``; the overlap is the interface. Collinear
+    overlaps of the same two blocks that touch end to end are merged into one interface.
+
+    Args:
+        layout: the blocks.
+        tol: distance tolerance relative to the layout size (largest side of its bounding
+            box).
+
+    Returns:
+        The interfaces, sorted by ``(block_a, block_b)`` and position along the edge.
+    """
+    if not (np.isfinite(tol) and tol >= 0.0):
+        raise ValueError(f"tol must be >= 0, got {tol}")
+    eps = tol * _layout_size(layout)
+    p = np.vstack(layout.polygons)
+    q = np.vstack([np.roll(poly, -1, axis=0) for poly in layout.polygons])
+    owner = np.repeat(np.arange(len(layout)), [len(poly) for poly in layout.polygons])
+    d = q - p
+    lengths = np.linalg.norm(d, axis=1)
+    # two overlapping edges have their midpoints closer than the longer edge's length, so
+    # searching around each edge as far as its own length finds every pair at least once
+    mid = 0.5 * (p + q)
+    near = cKDTree(mid).query_ball_point(mid, r=lengths + 2.0 * eps)
+    i = np.repeat(np.arange(len(near)), [len(h) for h in near])
+    j = np.concatenate(near).astype(np.int64)
+    pairs = np.unique(np.column_stack([np.minimum(i, j), np.maximum(i, j)]), axis=0)
+    empty = Interfaces(np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2)),
+                       np.zeros((0, 2)))
+    i, j = pairs[:, 0], pairs[:, 1]
+    # edge i belongs to the block with the lower index
+    swap = owner[i] > owner[j]
+    i, j = np.where(swap, j, i), np.where(swap, i, j)
+    keep = owner[i] != owner[j]
+    i, j = i[keep], j[keep]
+    u = d[i] / lengths[i, None]
+    off_a = _cross(u, p[j] - p[i])
+    off_b = _cross(u, q[j] - p[i])
+    opposite = np.einsum("ij,ij->i", u, d[j]) < 0.0
+    ta = np.einsum("ij,ij->i", u, p[j] - p[i])
+    tb = np.einsum("ij,ij->i", u, q[j] - p[i])
+    lo = np.maximum(0.0, np.minimum(ta, tb))
+    hi = np.minimum(lengths[i], np.maximum(ta, tb))
+    ok = (np.abs(off_a) <= eps) & (np.abs(off_b) <= eps) & opposite & (hi - lo > eps)
+    i, j, u, lo, hi = i[ok], j[ok], u[ok], lo[ok], hi[ok]
+    start = p[i] + lo[:, None] * u
+    end = p[i] + hi[:, None] * u
+    blocks_a, blocks_b = owner[i], owner[j]
+
+    merged: list[tuple[int, int, np.ndarray, np.ndarray]] = []
+    order = np.lexsort((start[:, 1], start[:, 0], blocks_b, blocks_a))
+    groups: dict[tuple[int, int], list[list[np.ndarray]]] = {}
+    for k in order:
+        groups.setdefault((int(blocks_a[k]), int(blocks_b[k])), []).append(
+            [start[k].copy(), end[k].copy()]
+        )
+    for (a, b), segs in groups.items():
+        changed = True
+        while changed:  # join collinear segments that meet end to end
+            changed = False
+            for m in range(len(segs)):
+                for k in range(len(segs)):
+                    if m == k or np.linalg.norm(segs[m][1] - segs[k][0]) > eps:
+                        continue
+                    tm = segs[m][1] - segs[m][0]
+                    tk = segs[k][1] - segs[k][0]
+                    if abs(_cross(tm, tk)) > eps * (np.linalg.norm(tm) + np.linalg.norm(tk)):
+                        continue
+                    segs[m][1] = segs[k][1]
+                    del segs[k]
+                    changed = True
+                    break
+                if changed:
+                    break
+        merged += [(a, b, s0, s1) for s0, s1 in segs]
+    if not merged:
+        return empty
+    return Interfaces(
+        np.array([m[0] for m in merged], dtype=np.int64),
+        np.array([m[1] for m in merged], dtype=np.int64),
+        np.ascontiguousarray([m[2] for m in merged], dtype=np.float64),
+        np.ascontiguousarray([m[3] for m in merged], dtype=np.float64),
+    )
+
+
+def _contains(poly: np.ndarray, x: np.ndarray, eps: float) -> bool:
+    """Whether point ``x`` lies in polygon ``poly`` or within ``eps`` of its outline."""
+    if np.any(x < poly.min(axis=0) - eps) or np.any(x > poly.max(axis=0) + eps):
+        return False
+    a, b = poly, np.roll(poly, -1, axis=0)
+    d = b - a
+    s = np.clip(np.einsum("ij,ij->i", x - a, d) / np.einsum("ij,ij->i", d, d), 0.0, 1.0)
+    if np.min(np.linalg.norm(x - a - s[:, None] * d, axis=1)) <= eps:
+        return True
+    up = (a[:, 1] > x[1]) != (b[:, 1] > x[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = a[:, 0] + (x[1] - a[:, 1]) * d[:, 0] / d[:, 1]
+    return bool(np.count_nonzero(up & (x[0] < xc)) % 2)
+
+
+def _loaded_block(layout: BlockLayout, point: np.ndarray, force: np.ndarray,
+                  eps: float) -> int:
+    """The block a point load acts on (see :func:`limit_analysis`)."""
+    hits = [b for b, poly in enumerate(layout.polygons) if _contains(poly, point, eps)]
+    if not hits:
+        raise ValueError(f"load point {tuple(point.tolist())} lies in no block")
+    if len(hits) > 1:  # on a shared edge: the block the force pushes into
+        f = np.linalg.norm(force)
+        if f > 0.0:
+            ahead = point + 1e3 * eps * force / f
+            into = [b for b in hits if _contains(layout.polygons[b], ahead, 0.0)]
+            hits = into or hits
+    return min(hits, key=lambda b: layout.names[b])
+
+
+def _parse_loads(loads: Sequence[Load], what: str) -> list[tuple[np.ndarray, np.ndarray]]:
+    out = []
+    for item in loads:
+        try:
+            x, f = item
+            x = np.asarray(x, dtype=np.float64).reshape(2)
+            f = np.asarray(f, dtype=np.float64).reshape(2)
+        except (TypeError, ValueError) as err:
+            raise ValueError(f"each of {what} must be ((x, y), (Fx, Fy)), got {item!r}") from err
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(f))):
+            raise ValueError(f"{what}: non-finite point or force {item!r}")
+        out.append((x, f))
+    return out
+
+
+def _block_densities(layout: BlockLayout, density: float | Mapping[str, float]) -> np.ndarray:
+    if isinstance(density, Mapping):
+        missing = sorted(set(layout.materials) - set(density))
+        if missing:
+            raise ValueError(f"no density given for materials {missing}")
+        rho = np.array([float(density[m]) for m in layout.materials])
+    else:
+        rho = np.full(len(layout), float(density))
+    if not np.all(np.isfinite(rho)) or np.any(rho < 0.0):
+        raise ValueError(f"densities must be finite and >= 0, got {np.unique(rho).tolist()}")
+    return rho
+
+
+def _fixed_blocks(layout: BlockLayout, supports: str | Sequence[str]) -> np.ndarray:
+    patterns = [supports] if isinstance(supports, str) else list(supports)
+    if not patterns:
+        raise ValueError("at least one support pattern is needed (e.g. 'abutment:*')")
+    fixed = np.zeros(len(layout), dtype=bool)
+    for pat in patterns:
+        hit = np.array([fnmatch.fnmatchcase(n, pat) for n in layout.names])
+        if not hit.any():
+            raise ValueError(f"support pattern {pat!r} matches no block")
+        fixed |= hit
+    if fixed.all():
+        raise ValueError("every block is a support: nothing can move")
+    return fixed
+
+
+def _add_point_load(rows: np.ndarray, slot: np.ndarray, centroids: np.ndarray, block: int,
+                    x: np.ndarray, f: np.ndarray) -> None:
+    """Add force ``f`` at ``x`` to the (F_x, F_y, M) rows of ``block`` (if it is free)."""
+    r = slot[block]
+    if r < 0:
+        return
+    arm = x - centroids[block]
+    rows[3 * r: 3 * r + 3] += [f[0], f[1], arm[0] * f[1] - arm[1] * f[0]]
+
+
+def limit_analysis(
+    layout: BlockLayout,
+    *,
+    density: float | Mapping[str, float],
+    width: float,
+    supports: str | Sequence[str],
+    live_loads: Sequence[Load] = (),
+    dead_loads: Sequence[Load] = (),
+    live_acceleration: Sequence[float] | None = None,
+    friction: float = 0.6,
+    g: float = G,
+    max_load_factor: float = 1e6,
+    tol: float = 1e-9,
+) -> LimitResult:
+    """Collapse load factor of a rigid-block structure by linear programming.
+
+    Maximises ``λ`` such that the dead loads plus ``λ`` times the live loads are in
+    equilibrium with no-tension, frictional interface forces (see the module doc).
+
+    A point load acts on the block whose outline contains its point (points on the outline
+    count). A point on the edge shared by two blocks loads the block the force pushes into;
+    if that is still ambiguous, the block whose name sorts first. Loads on supports are
+    carried by the ground and have no effect.
+
+    Args:
+        layout: the blocks.
+        density: density [kg/m^3], one value or one per material name.
+        width: out-of-plane thickness of all blocks [m].
+        supports: shell pattern(s) (``fnmatch``) of the names of fixed blocks, e.g.
+            ``"abutment:*"`` or ``["base", "pier:*"]``; each must match a block.
+        live_loads: ``((x, y), (F_x, F_y))`` point loads [m], [N] multiplied by ``λ``.
+        dead_loads: extra point loads of the same form, carried at their full value.
+        live_acceleration: ``(a_x, a_y)`` [m/s^2]: adds the body force ``mass · a`` of every
+            free block, at its centroid, to the live load (e.g. ``(g, 0)`` makes ``λ`` the
+            horizontal acceleration at collapse in units of g, as on a tilting table).
+        friction: Coulomb coefficient ``μ`` of every interface, ``>= 0`` (``inf``: no
+            sliding).
+        g: gravitational acceleration [m/s^2], acting in ``-y``.
+        max_load_factor: upper bound on ``λ``; reaching it gives status "no_mechanism".
+        tol: geometric tolerance relative to the layout size (interfaces, load points).
+
+    Returns:
+        The load factor, status, interface forces and the mechanism.
+
+    Raises:
+        ValueError: bad parameters, a support pattern matching no block, a load point in no
+            block, no interfaces, or a free block touching no other block.
+    """
+    if not (np.isfinite(width) and width > 0.0):
+        raise ValueError(f"width must be positive, got {width}")
+    if not (np.isfinite(g) and g >= 0.0):
+        raise ValueError(f"g must be >= 0, got {g}")
+    if not (friction >= 0.0):  # also rejects NaN; inf is allowed
+        raise ValueError(f"friction must be >= 0, got {friction}")
+    if not (np.isfinite(max_load_factor) and max_load_factor > 0.0):
+        raise ValueError(f"max_load_factor must be positive, got {max_load_factor}")
+    t0 = time.perf_counter()
+    nb = len(layout)
+    rho = _block_densities(layout, density)
+    fixed = _fixed_blocks(layout, supports)
+    live = _parse_loads(live_loads, "live_loads")
+    dead = _parse_loads(dead_loads, "dead_loads")
+    acc = None
+    if live_acceleration is not None:
+        acc = np.asarray(live_acceleration, dtype=np.float64).reshape(2)
+        if not np.all(np.isfinite(acc)):
+            raise ValueError(f"live_acceleration must be finite, got {live_acceleration}")
+
+    size = _layout_size(layout)
+    eps = tol * size
+    found = find_interfaces(layout, tol)
+    if found.size == 0:
+        raise ValueError("no interfaces: no two blocks share an edge")
+    used = ~(fixed[found.block_a] & fixed[found.block_b])
+    itf = Interfaces(*(np.ascontiguousarray(arr[used]) for arr in found))
+    if itf.size == 0:
+        raise ValueError("no interfaces: only supports touch each other")
+    touched = np.zeros(nb, dtype=bool)
+    touched[itf.block_a] = touched[itf.block_b] = True
+    lonely = [layout.names[b] for b in np.flatnonzero(~fixed & ~touched)]
+    if lonely:
+        raise ValueError(f"blocks touching no other block: {lonely[:5]}")
+
+    free = np.flatnonzero(~fixed)
+    slot = np.full(nb, -1, dtype=np.int64)
+    slot[free] = np.arange(free.size)
+    centroids = np.array([polygon_centroid(poly) for poly in layout.polygons])
+    mass = rho * np.array([polygon_area(poly) for poly in layout.polygons]) * width
+
+    # load vectors: (F_x, F_y, M about the centroid) per free block
+    f_dead = np.zeros(3 * free.size)
+    f_live = np.zeros(3 * free.size)
+    f_dead[1::3] = -mass[free] * g
+    if acc is not None:
+        f_live[0::3] += mass[free] * acc[0]
+        f_live[1::3] += mass[free] * acc[1]
+    for x, f in dead:
+        _add_point_load(f_dead, slot, centroids, _loaded_block(layout, x, f, eps), x, f)
+    for x, f in live:
+        _add_point_load(f_live, slot, centroids, _loaded_block(layout, x, f, eps), x, f)
+    if not np.any(f_live):
+        log.info("the live load is zero: only feasibility of the dead load is tested")
+
+    # scaling: lengths by the layout size, forces by the largest dead/live load component
+    scale_dead = float(np.abs(f_dead).max()) or 1.0
+    scale_live = float(np.abs(f_live).max()) or 1.0
+    moment_rows = np.tile([1.0, 1.0, 1.0 / size], free.size)
+    b_eq = -f_dead * moment_rows / scale_dead
+    live_col = f_live * moment_rows / scale_live
+
+    # equilibrium matrix. With finite friction each end force is a non-negative
+    # combination f+ (n + μ t) + f- (n - μ t) of the two edges of its friction cone, so
+    # N = f+ + f-, S = μ (f+ - f-) and the LP has no inequality rows (far fewer simplex
+    # iterations); without friction limit the columns are N n (N >= 0) and S t (S free).
+    n_int = itf.size
+    normal, tangent = itf.normal, itf.tangent
+    if np.isfinite(friction):
+        generators = (normal + friction * tangent, normal - friction * tangent)
+        col_bounds = [(0.0, None)] * 4
+    else:
+        generators = (normal, tangent)
+        col_bounds = [(0.0, None), (None, None)] * 2
+    rows, cols, vals = [], [], []
+    for k, ends in enumerate((itf.start, itf.end)):
+        for sign, blocks in ((1.0, itf.block_b), (-1.0, itf.block_a)):
+            r = slot[blocks]
+            on = r >= 0
+            arm = (ends - centroids[blocks]) / size
+            for j, direction in enumerate(generators):
+                col = 4 * np.arange(n_int) + 2 * k + j
+                comp = (direction[:, 0], direction[:, 1], _cross(arm, direction))
+                for c in range(3):
+                    rows.append(3 * r[on] + c)
+                    cols.append(col[on])
+                    vals.append(sign * comp[c][on])
+    n_var = 4 * n_int + 1
+    rows.append(np.arange(3 * free.size))
+    cols.append(np.full(3 * free.size, n_var - 1))
+    vals.append(live_col)
+    a_eq = coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(3 * free.size, n_var),
+    ).tocsr()
+
+    lam_cap = max_load_factor * scale_live / scale_dead
+    bounds = col_bounds * n_int + [(0.0, lam_cap)]
+    c = np.zeros(n_var)
+    c[-1] = -1.0
+    res = linprog(c, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs")
+    log.debug("limit analysis: %d free blocks, %d interfaces, LP %s in %.3g s", free.size,
+              n_int, res.status, time.perf_counter() - t0)
+
+    names = layout.names
+    velocities = np.zeros((nb, 3))
+    if res.status == 2:
+        return LimitResult(float("nan"), LimitStatus.INFEASIBLE, np.full((n_int, 4), np.nan),
+                           [], velocities, itf, names, fixed)
+    if res.status != 0:
+        raise RuntimeError(f"limit analysis LP failed: {res.message}")
+
+    lam = float(res.x[-1]) * scale_dead / scale_live
+    x = res.x[:-1].reshape(n_int, 2, 2) * scale_dead  # (interface, end, column)
+    if np.isfinite(friction):
+        x = np.stack([x[..., 0] + x[..., 1], friction * (x[..., 0] - x[..., 1])], axis=-1)
+    forces = x.reshape(n_int, 4)
+    if res.x[-1] >= lam_cap * (1.0 - _CAP_TOL):
+        return LimitResult(max_load_factor, LimitStatus.NO_MECHANISM, forces, [], velocities,
+                           itf, names, fixed)
+
+    y = np.asarray(res.eqlin.marginals, dtype=np.float64).reshape(free.size, 3)
+    velocities[free] = y * [1.0, 1.0, 1.0 / size]
+    if np.dot(live_col, y.ravel()) < 0.0:  # live loads do positive work
+        velocities = -velocities
+    speed = max(float(np.linalg.norm(_vertex_velocities(layout, centroids, velocities, b),
+                                     axis=1).max()) for b in free)
+    if speed > 0.0:
+        velocities /= speed
+    hinges = _mechanism(itf, centroids, velocities, names)
+    return LimitResult(lam, LimitStatus.COLLAPSE, forces, hinges, velocities, itf, names, fixed)
+
+
+def _point_velocity(centroids: np.ndarray, velocities: np.ndarray, blocks: np.ndarray,
+                    x: np.ndarray) -> np.ndarray:
+    """``(n, 2)`` velocity of the points ``x`` moving with ``blocks``."""
+    arm = x - centroids[blocks]
+    v = velocities[blocks]
+    return np.column_stack([v[:, 0] - v[:, 2] * arm[:, 1], v[:, 1] + v[:, 2] * arm[:, 0]])
+
+
+def _vertex_velocities(layout: BlockLayout, centroids: np.ndarray, velocities: np.ndarray,
+                       b: int) -> np.ndarray:
+    poly = layout.polygons[b]
+    return _point_velocity(centroids, velocities, np.full(len(poly), b), poly)
+
+
+def _mechanism(itf: Interfaces, centroids: np.ndarray, velocities: np.ndarray,
+               names: tuple[str, ...]) -> list[Hinge]:
+    """Classify the relative motion of the blocks at every interface."""
+    rel = [
+        _point_velocity(centroids, velocities, itf.block_b, x)
+        - _point_velocity(centroids, velocities, itf.block_a, x)
+        for x in (itf.start, itf.end)
+    ]
+    normal, tangent = itf.normal, itf.tangent
+    gap = np.column_stack([np.einsum("ij,ij->i", w, normal) for w in rel])
+    slip = np.column_stack([np.einsum("ij,ij->i", w, tangent) for w in rel])
+    spin = velocities[itf.block_b, 2] - velocities[itf.block_a, 2]
+    mid = 0.5 * (itf.start + itf.end)
+    length = itf.length
+    hinges = []
+    for i in range(itf.size):
+        a, b = int(itf.block_a[i]), int(itf.block_b[i])
+        if np.abs(slip[i]).max() > _MOTION_TOL:
+            kind, where, size = HingeKind.SLIDING, mid[i], float(np.abs(slip[i]).mean())
+        elif abs(spin[i]) * length[i] > _MOTION_TOL:
+            end = int(np.argmin(gap[i]))
+            kind, where, size = HingeKind.HINGE, (itf.start, itf.end)[end][i], abs(spin[i])
+        elif np.abs(gap[i]).max() > _MOTION_TOL:
+            kind, where, size = HingeKind.SEPARATION, mid[i], float(np.abs(gap[i]).mean())
+        else:
+            continue
+        hinges.append(Hinge(i, (names[a], names[b]), (float(where[0]), float(where[1])),
+                            kind, float(size)))
+    return hinges
