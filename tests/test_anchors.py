@@ -48,14 +48,17 @@ def grid_blocks(boxes, h, material="brick", comm=MPI.COMM_WORLD):
                                  material_names=[material])
 
 
-def test_pull_out_of_a_short_anchor_follows_the_bond_law():
+@pytest.mark.parametrize("bond", [BondLaw.uniform(3e6, 2e-4),
+                                  BondLaw((2e-4, 1e-3, 3e-3), (3e6, 3e6, 0.5e6))],
+                         ids=["elastic-plastic", "softening"])
+def test_pull_out_of_a_short_anchor_follows_the_bond_law(bond):
     """A short, (nearly) rigid anchor bonded over L = 0.2 m in a fixed block slips
-    uniformly, so the pull-out force is F(s) = π d L τ(s) for the bond law τ: rising
-    (k0 = 15 GPa/m), plateau, softening to a residual. Limit 1 % of the peak force."""
+    uniformly, so the pull-out force is F(s) = π d L τ(s) for the bond law τ: elastic
+    (k0 = 15 GPa/m) then perfectly plastic; or rising, plateau, softening to a residual.
+    Limit 1 % of the peak force."""
     blocks = grid_blocks([(0.0, 0.0, 0.3, 0.2)], 0.02)
     model = Model(blocks, {"brick": BRICK}, width=0.2, comm=MPI.COMM_SELF)
     model.fix_blocks("block:0")
-    bond = BondLaw((2e-4, 1e-3, 3e-3), (3e6, 3e6, 0.5e6))
     d, L = 0.012, 0.2
     anchors = Anchors(model, [Anchor([[0.1, 0.1], [0.35, 0.1]], diameter=d, bond=bond,
                                      steel=RIGID_STEEL)])
