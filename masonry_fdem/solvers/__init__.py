@@ -1,9 +1,10 @@
 """Time integration: explicit central difference and dynamic relaxation."""
 
-from masonry_fdem.solvers.dynamic_relaxation import DRResult, DynamicRelaxation
+from masonry_fdem.solvers.dynamic_relaxation import CollapseResult, DRResult, DynamicRelaxation
 from masonry_fdem.solvers.explicit import EnergyAccount, ExplicitSolver, UnstableTimeStepError
 
 __all__ = [
+    "CollapseResult",
     "DRResult",
     "DynamicRelaxation",
     "EnergyAccount",

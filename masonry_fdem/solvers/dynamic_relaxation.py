@@ -60,6 +60,24 @@ class DRResult:
         return self.residual / self.reference if self.reference > 0 else self.residual
 
 
+@dataclass(frozen=True)
+class CollapseResult:
+    """Outcome of :meth:`DynamicRelaxation.load_to_collapse`.
+
+    Attributes:
+        load_factor: the last load factor with equilibrium (the collapse load factor,
+            within ``resolution`` above it, if ``collapsed``).
+        resolution: the increment that failed last.
+        collapsed: False if ``max_load`` was carried.
+        history: the converged load factors, in order.
+    """
+
+    load_factor: float
+    resolution: float
+    collapsed: bool
+    history: list[float]
+
+
 class DynamicRelaxation:
     """Adaptive dynamic relaxation of a :class:`~masonry_fdem.model.Model`.
 
@@ -326,6 +344,79 @@ class DynamicRelaxation:
         if out is self.f_net:
             np.negative(self.f_net, out=self.f_net)
         return out
+
+    def snapshot(self) -> dict:
+        """The state a non-converged increment may have spoiled: displacements, the
+        contact friction history, the anchors' bar nodes (committed material, joint and
+        bond states are untouched by an increment that does not converge)."""
+        snap = {"u": self.model.u.x.array.copy()}
+        for k, c in enumerate(self.interactions):
+            if all(hasattr(c, a) for a in ("keys", "tau", "pmax", "rebuild")):
+                snap[("contact", k)] = (c.keys.copy(), c.tau.copy(), c.pmax.copy())
+        if self.anchors is not None:
+            snap["anchors"] = self.anchors.u.copy()
+        if self.disks is not None:
+            d = self.disks
+            snap["disks"] = (d.x.copy(), d.theta.copy())
+        return snap
+
+    def restore(self, snap: dict) -> None:
+        """Go back to a :meth:`snapshot` (collective: contact neighbour lists are rebuilt)."""
+        self.model.u.x.array[:] = snap["u"]
+        for k, c in enumerate(self.interactions):
+            key = ("contact", k)
+            if key in snap:
+                c.keys, c.tau, c.pmax = (a.copy() for a in snap[key])
+                c.rebuild(np.zeros_like(self.model.v))
+        if self.anchors is not None:
+            self.anchors.u[:] = snap["anchors"]
+        if self.disks is not None:
+            self.disks.x[:], self.disks.theta[:] = (a.copy() for a in snap["disks"])
+
+    def load_to_collapse(
+        self,
+        increment: float,
+        *,
+        start: float = 0.0,
+        max_load: float = math.inf,
+        refinements: int = 4,
+        callback: Callable[[DRResult], None] | None = None,
+    ) -> CollapseResult:
+        """Raise the live-load factor in increments until equilibrium is lost.
+
+        From the equilibrium at ``start``, the load factor grows by ``increment``; when an
+        increment finds no equilibrium (``max_iter`` reached), the state before it is
+        restored and the increment halved, up to ``refinements`` times. The collapse load
+        factor lies between the last converged factor and that plus the last increment
+        tried (its resolution).
+
+        Returns:
+            :class:`CollapseResult` with the converged factors in order.
+        """
+        if not increment > 0:
+            raise ValueError(f"increment must be > 0, got {increment}")
+        if refinements < 0:
+            raise ValueError(f"refinements must be >= 0, got {refinements}")
+        level = float(start)
+        step = float(increment)
+        converged: list[float] = []
+        halvings = 0
+        while level < max_load:
+            trial = min(level + step, max_load)
+            snap = self.snapshot()
+            res = self.solve(trial)
+            if callback is not None:
+                callback(res)
+            if res.converged:
+                level = trial
+                converged.append(level)
+                continue
+            self.restore(snap)
+            if halvings == refinements:
+                return CollapseResult(level, trial - level, True, converged)
+            halvings += 1
+            step *= 0.5
+        return CollapseResult(level, step, False, converged)
 
     def load_steps(
         self,
