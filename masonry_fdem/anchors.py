@@ -336,19 +336,10 @@ def _locate(blocks, pts: np.ndarray, tol: float = 1e-9):
                               & (bb[:, 1] - pad <= q[1]) & (q[1] <= bb[:, 3] + pad))
         for b in cand:
             c0, c1 = blocks.cell_offsets[b], blocks.cell_offsets[b + 1]
-            tri = blocks.x[blocks.cells[c0:c1]]
-            a, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-            det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-            d = q - a
-            s = (d[:, 0] * e2[:, 1] - d[:, 1] * e2[:, 0]) / det
-            t = (e1[:, 0] * d[:, 1] - e1[:, 1] * d[:, 0]) / det
-            inside = np.flatnonzero((s >= -tol) & (t >= -tol) & (s + t <= 1.0 + tol))
-            if inside.size:
-                k = inside[0]
+            k, w = _in_triangles(blocks.x[blocks.cells[c0:c1]], q, tol)
+            if k >= 0:
                 cell[i] = c0 + k
-                w = np.array([1.0 - s[k] - t[k], s[k], t[k]])
-                w = np.clip(w, 0.0, None)
-                bary[i] = w / w.sum()
+                bary[i] = w
                 break
     return cell, bary
 
