@@ -11,21 +11,14 @@ results are summed over ranks); rank 0 writes.
 
 from __future__ import annotations
 
-import base64
 from pathlib import Path
 
 import numpy as np
 
-from masonry_fdem.io.disk_output import _array
+from masonry_fdem.io._vtk import float_array as _array
+from masonry_fdem.io._vtk import int_array, write_collection
 
 __all__ = ["AnchorOutput"]
-
-
-def _ints(label: str, a: np.ndarray) -> str:
-    data = np.ascontiguousarray(a, dtype="<i8").tobytes()
-    header = np.array([len(data)], dtype="<u8").tobytes()
-    payload = base64.b64encode(header).decode() + base64.b64encode(data).decode()
-    return f'<DataArray type="Int64" Name="{label}" format="binary">{payload}</DataArray>'
 
 
 class AnchorOutput:
@@ -72,15 +65,12 @@ class AnchorOutput:
             f'<Piece NumberOfPoints="{n}" NumberOfVerts="0" NumberOfLines="{ne}" '
             'NumberOfStrips="0" NumberOfPolys="0">\n'
             f"<Points>{_array('Points', pts, 3)}</Points>\n"
-            f"<Lines>{_ints('connectivity', a.conn.ravel())}"
-            f"{_ints('offsets', 2 * np.arange(1, ne + 1))}</Lines>\n"
+            f"<Lines>{int_array('connectivity', a.conn.ravel())}"
+            f"{int_array('offsets', 2 * np.arange(1, ne + 1))}</Lines>\n"
             f'<PointData Scalars="slip" Vectors="displacement">\n{points}\n</PointData>\n'
             f'<CellData Scalars="axial_force">\n{cells}\n</CellData>\n'
             "</Piece>\n</PolyData>\n</VTKFile>\n"
         )
         (self.folder / name).write_text(xml)
         self.steps.append((float(t), name))
-        rows = "\n".join(f'<DataSet timestep="{tt:.9g}" file="{fn}"/>' for tt, fn in self.steps)
-        (self.folder / "anchors.pvd").write_text(
-            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0">\n'
-            f"<Collection>\n{rows}\n</Collection>\n</VTKFile>\n")
+        write_collection(self.folder / "anchors.pvd", self.steps)

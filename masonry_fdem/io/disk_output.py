@@ -9,20 +9,14 @@ scale array "radius", scale factor 2). Written by rank 0 (every rank holds every
 
 from __future__ import annotations
 
-import base64
 from pathlib import Path
 
 import numpy as np
 
+from masonry_fdem.io._vtk import float_array as _array
+from masonry_fdem.io._vtk import int_array, write_collection
+
 __all__ = ["DiskOutput"]
-
-
-def _array(name: str, values: np.ndarray, components: int) -> str:
-    data = np.ascontiguousarray(values, dtype="<f8").tobytes()
-    header = np.array([len(data)], dtype="<u8").tobytes()
-    payload = base64.b64encode(header).decode() + base64.b64encode(data).decode()
-    return (f'<DataArray type="Float64" Name="{name}" NumberOfComponents="{components}" '
-            f'format="binary">{payload}</DataArray>')
 
 
 class DiskOutput:
@@ -53,13 +47,6 @@ class DiskOutput:
         offsets = np.arange(1, d.n + 1, dtype="<i8")
         conn = np.arange(d.n, dtype="<i8")
 
-        def ints(label, a):
-            data = a.tobytes()
-            header = np.array([len(data)], dtype="<u8").tobytes()
-            payload = base64.b64encode(header).decode() + base64.b64encode(data).decode()
-            return (f'<DataArray type="Int64" Name="{label}" format="binary">{payload}'
-                    "</DataArray>")
-
         xml = (
             '<?xml version="1.0"?>\n'
             '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
@@ -67,7 +54,7 @@ class DiskOutput:
             f'<Piece NumberOfPoints="{d.n}" NumberOfVerts="{d.n}" NumberOfLines="0" '
             'NumberOfStrips="0" NumberOfPolys="0">\n'
             f"<Points>{_array('Points', pts, 3)}</Points>\n"
-            f"<Verts>{ints('connectivity', conn)}{ints('offsets', offsets)}</Verts>\n"
+            f"<Verts>{int_array('connectivity', conn)}{int_array('offsets', offsets)}</Verts>\n"
             '<PointData Scalars="radius" Vectors="velocity">\n'
             f"{_array('radius', d.r, 1)}\n{_array('velocity', vel, 3)}\n"
             f"{_array('angular_velocity', d.omega, 1)}\n{_array('rotation', d.theta, 1)}\n"
@@ -76,7 +63,4 @@ class DiskOutput:
         )
         (self.folder / name).write_text(xml)
         self.steps.append((float(t), name))
-        rows = "\n".join(f'<DataSet timestep="{tt:.9g}" file="{fn}"/>' for tt, fn in self.steps)
-        (self.folder / "disks.pvd").write_text(
-            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="1.0">\n'
-            f"<Collection>\n{rows}\n</Collection>\n</VTKFile>\n")
+        write_collection(self.folder / "disks.pvd", self.steps)
