@@ -34,6 +34,9 @@ from masonry_fdem.limit_analysis import limit_analysis
 from masonry_fdem.solvers import DynamicRelaxation
 
 
+ARCH_E = 10e9
+
+
 def build(case: str, t: float, h: float):
     """Layout, LP load [N], loaded point, load direction, materials, supports."""
     if case == "rock":
@@ -46,7 +49,7 @@ def build(case: str, t: float, h: float):
                           abutment_width=0.4)
         r = 1.0 + t
         point = (r * math.cos(math.radians(135.0)), r * math.sin(math.radians(135.0)))
-        direction, rho, E, supports = (0.0, -1.0), 2000.0, 10e9, "abutment:*"
+        direction, rho, E, supports = (0.0, -1.0), 2000.0, ARCH_E, "abutment:*"
         mats = {"voussoir": Material(rho, E, 0.2), "abutment": Material(rho, 3 * E, 0.2)}
     la = limit_analysis(lay, density=rho, width=1.0, supports=supports,
                         live_loads=[(point, direction)], friction=10.0)
@@ -63,16 +66,23 @@ def main() -> None:
     ap.add_argument("--step", type=float, default=2e-5, help="displacement step [m]")
     ap.add_argument("--refinements", type=int, default=4)
     ap.add_argument("--max-iter", type=int, default=100_000)
+    ap.add_argument("--rtol", type=float, default=1e-6)
+    ap.add_argument("--damping", choices=["displacement", "velocity"], default="velocity")
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
     lay, p_la, point, direction, mats, supports, h = build(args.case, args.t, args.h)
     model = Model(lay.mesh(h, comm), mats, width=1.0, comm=comm)
     model.fix_blocks(supports)
     model.add_gravity()
-    load_nodes = None
+    contact = BlockContact(model, ContactSettings(friction=10.0,
+                                                  penalty_factor=args.penalty_factor))
+    t0 = time.perf_counter()
     if args.control == "load":
         model.add_point_load(point, direction)
-    else:
+    dr = DynamicRelaxation(model, contact=contact, rtol=args.rtol, ke_tol=math.inf,
+                           max_iter=args.max_iter, damping=args.damping)
+    assert dr.solve(0.0).converged
+    if args.control == "displacement":  # the platen touches the arch after self-weight
         near = np.hypot(*(model.X - point).T)
         x0 = model.X[int(np.argmin(near))] if near.size else point
         x0 = comm.bcast(x0 if comm.rank == 0 else None, root=0)
@@ -80,21 +90,22 @@ def main() -> None:
         model.prescribe_nodes(lambda X: np.hypot(X[0] - x0[0], X[1] - x0[1]) < 1e-9, comps,
                               "drive")
         load_nodes = 1 if direction[0] == 0 else 0
-    contact = BlockContact(model, ContactSettings(friction=10.0,
-                                                  penalty_factor=args.penalty_factor))
-    dr = DynamicRelaxation(model, contact=contact, rtol=1e-6, ke_tol=math.inf,
-                           max_iter=args.max_iter)
-    t0 = time.perf_counter()
-    assert dr.solve(0.0).converged
+        dr = DynamicRelaxation(model, contact=contact, rtol=args.rtol, ke_tol=math.inf,
+                               max_iter=args.max_iter, damping=args.damping)
     if args.control == "load":
         res = dr.load_to_collapse(0.1 * p_la, refinements=args.refinements)
         peak = res.load_factor
     else:
         peak = 0.0
         sign = float(direction[load_nodes])
+        # steps from the self-weight position of the driven node
+        drive = next(p for p in model.prescriptions if p.name == "drive")
+        sel = drive.components == load_nodes
+        u_sw = comm.allreduce(float(model.u.x.array[drive.dofs[sel]].sum()))
+        u_sw /= max(comm.allreduce(int(sel.sum())), 1)
         for k in range(1, 10_000):
             disp = [None, None]
-            disp[load_nodes] = sign * k * args.step
+            disp[load_nodes] = u_sw + sign * k * args.step
             res = dr.solve(0.0, displacement={"drive": tuple(disp)})
             force = sign * dr.reactions()["drive"][load_nodes]
             peak = max(peak, force)

@@ -67,7 +67,12 @@ Schema (``*``: required):
     Coulomb coefficient of that analysis (default: the mortar's tan_phi); ``dr_rtol``
     relative residual of dynamic relaxation (1e-6); ``max_iterations`` per increment
     (200000); ``output`` run folder ("runs/<case file stem>"; relative to the working
-    directory).
+    directory); ``refinements`` halvings of a load increment that finds no equilibrium
+    before collapse is declared (4); ``hinge_opening`` [m] opening (beyond the
+    self-weight state) at which an end of a joint counts as open (1e-5); ``penalty_factor``
+    of the block contact at dry joints, × E/h (20); displacement control stops once the
+    load has fallen for ``post_peak_steps`` (3) steps after the peak, or below
+    (1 − ``post_peak_drop``) (0.2) of it.
 ``[[anchors]]``
     Repairs: ``layout``\\* "radial" (``angles``\\*: list of polar angles [deg] about the
     intrados centre, 90 = crown; ``cover`` [m] from intrados and extrados, 0.02) or
@@ -317,6 +322,11 @@ class AnalysisSpec:
     dr_rtol: float
     max_iterations: int
     output: Path
+    refinements: int = 4
+    hinge_opening: float = 1e-5
+    penalty_factor: float = 20.0
+    post_peak_steps: int = 3
+    post_peak_drop: float = 0.2
 
 
 @dataclass(frozen=True)
@@ -385,6 +395,29 @@ class ArchCase:
         return BlockLayout(tuple(full.polygons[i] for i in keep),
                            tuple(full.materials[i] for i in keep),
                            tuple(full.names[i] for i in keep))
+
+    def mesh_layout(self) -> BlockLayout:
+        """:meth:`layout` with the :meth:`load_points` added as vertices of the
+        voussoirs they bear on, so the mesh has a node exactly there (the outlines are
+        unchanged: the new vertices lie on straight edges)."""
+        layout = self.layout()
+        polys = list(layout.polygons)
+        tol = 1e-9 * self.arch.span
+        for pt in self.load_points():
+            for i, (poly, name) in enumerate(zip(polys, layout.names, strict=True)):
+                if not name.startswith("voussoir:"):
+                    continue
+                a, b = poly, np.roll(poly, -1, axis=0)
+                d = b - a
+                t = np.einsum("ij,ij->i", pt - a, d) / np.einsum("ij,ij->i", d, d)
+                near = np.linalg.norm(a + np.clip(t, 0, 1)[:, None] * d - pt, axis=1)
+                k = int(np.argmin(near))
+                if near[k] > tol:
+                    continue
+                if np.min(np.linalg.norm(poly - pt, axis=1)) > tol:
+                    polys[i] = np.insert(poly, k + 1, pt, axis=0)
+                break
+        return BlockLayout(tuple(polys), layout.materials, layout.names)
 
     def materials(self) -> dict[str, Material]:
         """Block material name -> :class:`~masonry_fdem.materials.Material`."""
@@ -682,7 +715,9 @@ _DAMAGE_KEYS = {
     DamageKind.OPEN_JOINT: ("type", "ring", "index", "position"),
     DamageKind.MISSING_BRICK: ("type", "ring", "index"),
 }
-_ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "output")
+_ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "output",
+                  "refinements", "hinge_opening", "penalty_factor", "post_peak_steps",
+                  "post_peak_drop")
 _ANCHOR_KEYS = ("layout", "angles", "cover", "start_angle", "end_angle", "depth", "pieces",
                 "diameter", "count", "prestress", "plates", "bond_diameter", "segment", "name",
                 "steel", "bond")
@@ -1041,7 +1076,14 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         an.number("friction", mortar.tan_phi if mortar else 0.6, ge=0.0),
         an.number("dr_rtol", 1e-6, gt=0.0),
         an.integer("max_iterations", 200_000, ge=1),
-        Path(an.string("output", f"runs/{name}") or "."))
+        Path(an.string("output", f"runs/{name}") or "."),
+        an.integer("refinements", 4, ge=0),
+        an.number("hinge_opening", 1e-5, gt=0.0),
+        an.number("penalty_factor", 20.0, gt=0.0),
+        an.integer("post_peak_steps", 3, ge=1),
+        an.number("post_peak_drop", 0.2, gt=0.0))
+    if analysis.post_peak_drop is not None and not analysis.post_peak_drop < 1.0:
+        an.bad("post_peak_drop", f"must be < 1, got {analysis.post_peak_drop:g}")
     if not problems and None in (arch, mortar, ring, loading):
         problems.append("the case is incomplete")  # a check above forgot to say why
     if problems:

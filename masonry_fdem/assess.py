@@ -1,0 +1,614 @@
+"""Remnant strength of a masonry arch: load to collapse, hinge sequence, limit analysis.
+
+:func:`assess` runs one :class:`~masonry_fdem.case.ArchCase` (``masonry-fdem assess
+CASE.toml`` on the command line):
+
+1. the rigid-block limit analysis of the same blocks (linear programming, seconds): the
+   collapse load LimitState:RING-style tools give, reported beside the FDEM result;
+2. the FDEM model: deformable voussoirs and abutments (the abutments fixed), mortar and
+   ring interfaces as :class:`~masonry_fdem.contact.Joints` (a joint without tensile
+   strength or cohesion in the case file is a dry joint, left to the frictional
+   :class:`~masonry_fdem.contact.BlockContact`), anchors if any; self-weight first;
+3. load to collapse by dynamic relaxation (velocity-quotient damping, see
+   :mod:`masonry_fdem.solvers.dynamic_relaxation`):
+
+   * ``control = "load"``: the load on the spreader grows by ``increment`` [N]; an
+     increment without equilibrium is undone and halved ``refinements`` times; the
+     collapse load is the last load carried, within the last increment tried;
+   * ``control = "displacement"``: a rigid platen (the nodes under the spreader's ends)
+     is driven down in steps of ``displacement_increment`` [m] from its self-weight
+     position; the load is the platen's reaction and the collapse load its peak. This
+     traces the post-peak branch and reaches the peak where load control stops short
+     (near the peak the structure is so soft that equilibrium iterations stall);
+4. after every converged step the opening of every radial joint (springings included) at
+   its two ends, beyond the self-weight state: an end opens past ``hinge_opening`` [m]
+   while the other stays closed: a hinge (its side, intrados or extrados, named); both
+   ends open: the joint has separated. The first load at which each joint does so is the
+   hinge sequence.
+
+Every output goes to one run folder, written only when the run is complete (the files
+are assembled in a hidden sibling folder and moved in at the end; a run that fails
+leaves nothing): ``report.md`` (the summary with pictures), ``load_displacement.png``,
+``mechanism.png`` (deformed blocks, magnified), ``hinges.png`` (the hinges of FDEM and of
+the limit analysis on the arch), ``curve.csv``, ``hinges.csv``, ``summary.json`` and the
+case file. Units are SI: N, m.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import shutil
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem.case import (
+    ArchCase,
+    CaseError,
+    LoadControl,
+    _arch_parameter,
+    _classify,
+    load_case,
+)
+from masonry_fdem.geometry.arches import ArchKind
+
+__all__ = ["Assessment", "JointEvent", "assess", "build_model"]
+
+
+@dataclass(frozen=True)
+class JointEvent:
+    """A joint that opened: a hinge (one end open) or a separation (both ends).
+
+    Attributes:
+        order: 1 for the first joint to open, 2 for the next, ...
+        joint: ``"ring k joint j"`` (joint j starts voussoir j; 0 and n: the springings).
+        blocks: the two blocks.
+        kind: "hinge" or "separation".
+        side: "intrados" or "extrados" (hinge: the side that opens), "" (separation).
+        position: ``(x, y)`` [m] of the opening end (separation: the joint's midpoint).
+        s: the position along the arch, 0 left springing, 0.5 crown, 1 right springing.
+        load: the load [N] of the first converged step with the joint open.
+        displacement: the load-line displacement [m] then.
+    """
+
+    order: int
+    joint: str
+    blocks: tuple[str, str]
+    kind: str
+    side: str
+    position: tuple[float, float]
+    s: float
+    load: float
+    displacement: float
+
+
+@dataclass
+class Assessment:
+    """Result of :func:`assess` (loads [N] on the whole barrel width, lengths [m]).
+
+    Attributes:
+        case: the case name.
+        control: "load" or "displacement".
+        collapse_load: the largest load carried (load control: the last converged load;
+            displacement control: the peak reaction).
+        resolution: the load step that failed last (load control) or the largest load
+            change between the peak and its neighbouring steps (displacement control).
+        collapsed: False if ``max_load`` (or ``max_displacement``) was reached first.
+        loads, displacements: the load–displacement curve at the load line (converged
+            steps; displacement downward positive), self-weight state first.
+        iterations: DR iterations of each point of the curve.
+        events: the hinge sequence.
+        hinges_at_collapse: the joints open at the collapse state.
+        limit_load: the limit-analysis collapse load (None if not run), ``limit_status``
+            its LP status and ``limit_hinges`` its hinges (``(blocks, position)``).
+        folder, report: the run folder and ``report.md`` (None if not written).
+        cells, elapsed: the mesh size and the wall time [s].
+    """
+
+    case: str
+    control: str
+    collapse_load: float
+    resolution: float
+    collapsed: bool
+    loads: np.ndarray
+    displacements: np.ndarray
+    iterations: list[int]
+    events: list[JointEvent]
+    hinges_at_collapse: list[JointEvent]
+    limit_load: float | None = None
+    limit_status: str | None = None
+    limit_hinges: list[tuple[tuple[str, str], tuple[float, float]]] = field(
+        default_factory=list)
+    folder: Path | None = None
+    report: Path | None = None
+    cells: int = 0
+    elapsed: float = 0.0
+
+    @property
+    def ratio(self) -> float | None:
+        """FDEM collapse load / limit-analysis load."""
+        if not self.limit_load or not math.isfinite(self.limit_load):
+            return None
+        return self.collapse_load / self.limit_load
+
+
+# ---------------------------------------------------------------------------- the model
+def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
+    """The FDEM model of a case (collective).
+
+    Returns:
+        ``(model, interactions, anchors)``: the :class:`~masonry_fdem.model.Model` (its
+        abutments fixed, self-weight as a dead load), ``[BlockContact, Joints]`` and the
+        :class:`~masonry_fdem.anchors.Anchors` (None without anchors).
+    """
+    from masonry_fdem import Model
+    from masonry_fdem.anchors import Anchors
+    from masonry_fdem.contact import BlockContact, ContactSettings, Joints
+
+    layout = case.mesh_layout()
+    mesh = layout.mesh(case.arch.mesh_size, comm)
+    model = Model(mesh, case.materials(), width=case.arch.width, comm=comm)
+    model.fix_blocks("abutment:*", name="abutments")
+    if case.loading.self_weight:
+        model.add_gravity()
+    contact = BlockContact(model, ContactSettings(
+        friction=case.analysis.friction, penalty_factor=case.analysis.penalty_factor))
+
+    def bond(jm):
+        return jm if jm is not None and (jm.bonded or jm.kn is not None) else None
+
+    table = {k: bond(v) for k, v in case.joint_materials().items()}
+    rules = [(where, bond(jm)) for where, jm in case.joint_rules(layout)]
+    if case.ring_joint_type == "sand" or case.arch.rings > 1:
+        # ring interfaces not named by a rule: the ring joint of the case
+        from masonry_fdem.limit_analysis import find_interfaces
+
+        itf = find_interfaces(layout)
+        ring = [i for i in range(itf.size)
+                if (_classify(layout.names[itf.block_a[i]], layout.names[itf.block_b[i]],
+                              case.arch) or ("",))[0] == "ring"]
+        if ring:
+            from masonry_fdem.case import _on_segments
+
+            rules.append((_on_segments(itf.start[ring], itf.end[ring],
+                                       1e-6 * case.arch.span), bond(case.ring_joint)))
+    joints = Joints(model, table, where=rules, contact=contact)
+    specs = case.anchors()
+    anchors = Anchors(model, specs) if specs else None
+    return model, [contact, joints], anchors
+
+
+class _JointMonitor:
+    """Openings of the radial joints at their two ends (collective)."""
+
+    def __init__(self, case: ArchCase, model):
+        from masonry_fdem.limit_analysis import find_interfaces
+
+        layout = case.layout()
+        itf = find_interfaces(layout)
+        names = list(model.blocks.block_names)
+        self.case = case
+        self.model = model
+        self.rows = []
+        for i in range(itf.size):
+            na, nb = layout.names[itf.block_a[i]], layout.names[itf.block_b[i]]
+            where = _classify(na, nb, case.arch)
+            if where is None or where[0] != "joint":
+                continue
+            self.rows.append((i, f"ring {where[1]} joint {where[2]}", (na, nb),
+                              names.index(na), names.index(nb)))
+        n = len(self.rows)
+        self.ends = np.zeros((n, 2, 2))
+        self.normal = np.zeros((n, 2))
+        self.node = -np.ones((n, 2, 2), dtype=np.int64)  # [joint, end, block a/b]
+        cent = np.array([np.mean(p, axis=0) for p in layout.polygons])
+        for k, (i, _, _, ba, bb) in enumerate(self.rows):
+            p0, p1 = itf.start[i], itf.end[i]
+            self.ends[k] = (p0, p1)
+            t = (p1 - p0) / np.linalg.norm(p1 - p0)
+            nrm = np.array([-t[1], t[0]])
+            if np.dot(nrm, cent[itf.block_b[i]] - cent[itf.block_a[i]]) < 0:
+                nrm = -nrm
+            self.normal[k] = nrm
+            for side, b in enumerate((ba, bb)):
+                own = np.flatnonzero(model.node_block == b)
+                if own.size == 0:
+                    continue
+                for e in range(2):
+                    d = np.linalg.norm(model.X[own] - self.ends[k, e], axis=1)
+                    self.node[k, e, side] = own[int(np.argmin(d))]
+        self.base = np.zeros((n, 2))
+        self.side = [self._intrados_end(k) for k in range(n)]
+
+    def _intrados_end(self, k: int) -> int:
+        """0 or 1: the end of joint k nearer the arch's centre of curvature."""
+        arch = self.case.arch
+        mid = self.ends[k].mean(axis=0)
+        if arch.kind is ArchKind.SEGMENTAL:
+            half = 0.5 * arch.span
+            c = np.array([0.0, arch.rise - (half * half + arch.rise**2) / (2 * arch.rise)])
+        elif arch.kind is ArchKind.POINTED:
+            cx = (arch.rise**2 - (0.5 * arch.span) ** 2) / arch.span
+            c = np.array([cx if mid[0] < 0 else -cx, 0.0])
+        else:
+            c = np.zeros(2)
+        d = np.linalg.norm(self.ends[k] - c, axis=1)
+        return int(np.argmin(d))
+
+    def openings(self) -> np.ndarray:
+        """``(n, 2)`` normal opening [m] at both ends (positive: open), minus the
+        self-weight state's."""
+        u = self.model.u.x.array.reshape(-1, 2)
+        du = np.zeros((len(self.rows), 2, 2, 2))
+        ok = self.node >= 0
+        du[ok] = u[self.node[ok]]
+        du = self.model.comm.allreduce(du)
+        rel = du[:, :, 1, :] - du[:, :, 0, :]
+        return np.einsum("kej,kj->ke", rel, self.normal) - self.base
+
+    def classify(self, tol: float) -> list[tuple[int, str, str]]:
+        """``(row, kind, side)`` of the joints open beyond ``tol`` [m]."""
+        out = []
+        op = self.openings()
+        for k in range(len(self.rows)):
+            o = op[k]
+            if o.min() > tol:
+                out.append((k, "separation", ""))
+            elif o.max() > tol:
+                end = int(np.argmax(o))
+                out.append((k, "hinge", "intrados" if end == self.side[k] else "extrados"))
+        return out
+
+    def event(self, k: int, kind: str, side: str, order: int, load: float,
+              disp: float) -> JointEvent:
+        i, label, blocks, _, _ = self.rows[k]
+        if kind == "hinge":
+            op = self.openings()[k]
+            pos = self.ends[k, int(np.argmax(op))]
+        else:
+            pos = self.ends[k].mean(axis=0)
+        s = _arch_parameter(self.case.arch, self.ends[k].mean(axis=0))
+        return JointEvent(order, label, blocks, kind, side, (float(pos[0]), float(pos[1])),
+                          float(s), float(load), float(disp))
+
+
+# ---------------------------------------------------------------------------- the run
+def assess(
+    case: ArchCase | str | Path | Mapping[str, Any],
+    *,
+    out: str | Path | None = None,
+    overwrite: bool = False,
+    progress: bool | None = None,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    write: bool = True,
+    callback: Callable[[dict], None] | None = None,
+) -> Assessment:
+    """Load an arch case to collapse and report it (collective; see the module doc).
+
+    Args:
+        case: an :class:`~masonry_fdem.case.ArchCase`, a TOML file or a dict of one.
+        out: the run folder (default: the case's ``analysis.output``).
+        overwrite: allow a run folder that exists and is not empty.
+        progress: draw a progress bar on stderr (default: when stderr is a terminal).
+        comm: MPI communicator.
+        write: write the run folder (False: compute only).
+        callback: called on every rank after each converged step with
+            ``{"load": N, "displacement": m, "iterations": int}``.
+
+    Raises:
+        CaseError: a bad case, or a run folder that is not free; nothing is written.
+    """
+    t_start = time.perf_counter()
+    if not isinstance(case, ArchCase):
+        case = load_case(case)
+    folder = Path(out) if out is not None else case.analysis.output
+    if write:
+        _check_folder(case, folder, overwrite, comm)
+    from masonry_fdem.io import ProgressBar
+    from masonry_fdem.solvers import DynamicRelaxation
+
+    ld = case.loading
+    an = case.analysis
+    la = None
+    if an.limit_analysis:
+        la = case.limit_analysis() if comm.rank == 0 else None
+        la = comm.bcast(la, root=0)
+    limit_load = float(la.load_factor) if la is not None else None
+    if limit_load is not None and not math.isfinite(limit_load):
+        limit_load = None
+
+    model, inter, anchors = build_model(case, comm)
+    monitor = _JointMonitor(case, model)
+    points = case.load_points()
+    bar = ProgressBar(f"{case.name}", comm=comm,
+                      force=bool(progress)) if progress is not False else None
+    scale = limit_load or ld.max_load or 20 * ld.increment
+
+    dr = DynamicRelaxation(model, contact=inter, anchors=anchors, rtol=an.dr_rtol,
+                           ke_tol=math.inf, max_iter=an.max_iterations, damping="velocity")
+    res = dr.solve(0.0)
+    if not res.converged:
+        raise RuntimeError(f"{case.name}: no equilibrium under self-weight "
+                           f"({res.iterations} iterations); the arch cannot stand")
+    monitor.base = monitor.openings() + monitor.base
+    loads, disps, iters = [0.0], [0.0], [res.iterations]
+    events: list[JointEvent] = []
+    seen: set[int] = set()
+    state = {"open": []}
+
+    # load-line displacement: mean vertical displacement of the nodes nearest the points
+    load_nodes = [model._nearest_node(p, "voussoir:*") for p in points]
+    u_sw = _mean_uy(model, load_nodes)
+
+    def record(load: float, iterations: int) -> None:
+        disp = u_sw - _mean_uy(model, load_nodes)
+        loads.append(float(load))
+        disps.append(float(disp))
+        iters.append(int(iterations))
+        opened = monitor.classify(an.hinge_opening)
+        state["open"] = [(k, kind, side, load, disp) for k, kind, side in opened]
+        for k, kind, side in opened:
+            if k not in seen:
+                seen.add(k)
+                events.append(monitor.event(k, kind, side, len(events) + 1, load, disp))
+        if bar is not None:
+            bar.update(load / scale, f"{load / 1e3:8.2f} kN  {disp * 1e3:7.3f} mm  "
+                       f"{len(seen)} joints open")
+        if callback is not None:
+            callback({"load": load, "displacement": disp, "iterations": iterations})
+
+    open_at_collapse: list = []
+    if ld.control is LoadControl.LOAD:
+        for p in points:
+            model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
+
+        def on_step(r) -> None:
+            if r.converged:
+                record(r.load_factor, r.iterations)
+
+        cres = dr.load_to_collapse(ld.increment, max_load=ld.max_load or math.inf,
+                                   refinements=an.refinements, callback=on_step)
+        collapse, resolution, collapsed = cres.load_factor, cres.resolution, cres.collapsed
+        open_at_collapse = state["open"]
+    else:
+        sel = [int(n) for n in load_nodes]
+        ids = comm.allgather([int(model.node_input[n]) for n in sel if n >= 0])
+        gids = {g for part in ids for g in part}
+        _prescribe_node_ids(model, gids, "platen")
+        dr = DynamicRelaxation(model, contact=inter, anchors=anchors, rtol=an.dr_rtol,
+                               ke_tol=math.inf, max_iter=an.max_iterations,
+                               damping="velocity")
+        peak, k_peak, falling, collapsed = 0.0, 0, 0, False
+        step = 0
+        while True:
+            step += 1
+            d = step * ld.displacement_increment
+            if ld.max_displacement is not None and d > ld.max_displacement * (1 + 1e-12):
+                break
+            r = dr.solve(0.0, displacement={"platen": (None, u_sw - d)})
+            if not r.converged:
+                collapsed = True
+                break
+            load = -float(dr.reactions()["platen"][1])
+            record(load, r.iterations)
+            if load > peak:
+                peak, k_peak, falling = load, len(loads) - 1, 0
+                open_at_collapse = state["open"]
+            else:
+                falling += 1
+            if falling >= an.post_peak_steps or load < (1 - an.post_peak_drop) * peak:
+                collapsed = True
+                break
+        collapse = peak
+        nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
+        resolution = max((abs(peak - x) for x in nb), default=peak)
+    if bar is not None:
+        bar.close()
+
+    hinges_now = [monitor.event(k, kind, side, 0, load, disp)
+                  for k, kind, side, load, disp in open_at_collapse]
+    result = Assessment(
+        case=case.name, control=ld.control.value, collapse_load=float(collapse),
+        resolution=float(resolution), collapsed=bool(collapsed),
+        loads=np.array(loads), displacements=np.array(disps), iterations=iters,
+        events=events, hinges_at_collapse=hinges_now, limit_load=limit_load,
+        limit_status=None if la is None else str(la.status),
+        limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
+        cells=int(model.blocks.n_cells))
+    result.elapsed = time.perf_counter() - t_start
+    if write:
+        _write(case, result, folder, overwrite, model, inter, anchors, comm)
+    return result
+
+
+def _mean_uy(model, nodes) -> float:
+    u = model.u.x.array
+    s = sum(float(u[2 * n + 1]) for n in nodes if n >= 0)
+    return model.comm.allreduce(s) / len(nodes)
+
+
+def _prescribe_node_ids(model, gids: set[int], name: str) -> None:
+    """Prescribe the vertical dof of the nodes with these input ids (x left free)."""
+    ids = np.array(sorted(gids), dtype=np.int64)
+    local = np.isin(model.node_input, ids)
+    model.prescribe_nodes(_NodeMask(model, local), (None, 0.0), name)
+
+
+class _NodeMask:
+    """A ``where`` for :meth:`Model.prescribe_nodes` that picks given local nodes."""
+
+    def __init__(self, model, mask):
+        self.x = model.X[mask]
+
+    def __call__(self, X):
+        if self.x.shape[0] == 0:
+            return np.zeros(X.shape[1], dtype=bool)
+        d = np.min(np.hypot(X[0][:, None] - self.x[None, :, 0],
+                            X[1][:, None] - self.x[None, :, 1]), axis=1)
+        return d < 1e-12
+
+
+def _check_folder(case: ArchCase, folder: Path, overwrite: bool, comm) -> None:
+    error = None
+    if comm.rank == 0:
+        if folder.exists() and not folder.is_dir():
+            error = f"output: {folder} exists and is not a folder"
+        elif folder.is_dir() and any(folder.iterdir()) and not overwrite:
+            error = (f"output: the folder {folder} exists and is not empty; choose another "
+                     "output or overwrite it")
+    error = comm.bcast(error, root=0)
+    if error:
+        raise CaseError(error, str(case.source) if case.source else None)
+
+
+# ---------------------------------------------------------------------------- outputs
+def _write(case, res: Assessment, folder: Path, overwrite, model, inter, anchors, comm):
+    from masonry_fdem.io import plot_blocks
+
+    tmp = folder.parent / f".{folder.name}.partial"
+    if comm.rank == 0:
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir(parents=True)
+    comm.barrier()
+    try:
+        span = case.arch.span
+        u = model.gather_nodal(model.u.x.array)
+        umax = float(np.abs(u).max()) if u is not None and u.size else 0.0
+        umax = comm.bcast(umax, root=0)
+        mag = 0.05 * span / umax if umax > 0 else 1.0
+        plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
+                    title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
+                    joints=inter[1], anchors=anchors)
+        if comm.rank == 0:
+            _write_rank0(case, res, tmp, mag)
+        comm.barrier()
+        if comm.rank == 0:
+            folder.mkdir(parents=True, exist_ok=True)
+            for f in sorted(tmp.iterdir()):
+                f.replace(folder / f.name)
+            tmp.rmdir()
+    except BaseException:
+        if comm.rank == 0:
+            shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    res.folder = folder
+    res.report = folder / "report.md"
+    comm.barrier()
+
+
+def _write_rank0(case, res: Assessment, tmp: Path, mag: float) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    with open(tmp / "curve.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["load_N", "displacement_m", "iterations"])
+        for row in zip(res.loads, res.displacements, res.iterations, strict=True):
+            w.writerow([f"{row[0]:.6g}", f"{row[1]:.6e}", row[2]])
+    with open(tmp / "hinges.csv", "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["order", "joint", "kind", "side", "x_m", "y_m", "s", "load_N",
+                    "displacement_m"])
+        for e in res.events:
+            w.writerow([e.order, e.joint, e.kind, e.side, f"{e.position[0]:.4f}",
+                        f"{e.position[1]:.4f}", f"{e.s:.4f}", f"{e.load:.6g}",
+                        f"{e.displacement:.6e}"])
+    summary = {k: v for k, v in asdict(res).items()
+               if k not in ("loads", "displacements", "iterations", "folder", "report")}
+    summary["ratio_to_limit_analysis"] = res.ratio
+    with open(tmp / "summary.json", "w") as fh:
+        json.dump(summary, fh, indent=1, default=str)
+    if case.source is not None and Path(case.source).is_file():
+        shutil.copyfile(case.source, tmp / "case.toml")
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.plot(res.displacements * 1e3, res.loads / 1e3, "o-", ms=3, label="FDEM")
+    if res.limit_load:
+        ax.axhline(res.limit_load / 1e3, color="C3", ls="--", label="limit analysis")
+    for e in res.events:
+        ax.annotate(str(e.order), (e.displacement * 1e3, e.load / 1e3), fontsize=7,
+                    color="C2", xytext=(2, -9), textcoords="offset points")
+    ax.set_xlabel("displacement at the load line [mm]")
+    ax.set_ylabel("load [kN]")
+    ax.set_title(f"{case.name}: {res.control} control")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(tmp / "load_displacement.png", dpi=120)
+    plt.close(fig)
+
+    layout = case.layout()
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for poly in layout.polygons:
+        p = np.vstack([poly, poly[:1]])
+        ax.plot(p[:, 0], p[:, 1], color="0.6", lw=0.6)
+    for e in res.hinges_at_collapse:
+        ax.plot(*e.position, "o", ms=9, mfc="none", mec="C3", mew=2)
+    for e in res.events:
+        ax.annotate(str(e.order), e.position, fontsize=8, color="C3",
+                    xytext=(4, 4), textcoords="offset points")
+    for _, pos in res.limit_hinges:
+        ax.plot(*pos, "x", ms=8, color="C0", mew=2)
+    for x, y in case.load_points():
+        ax.annotate("", (x, y), xytext=(x, y + 0.12 * case.arch.span),
+                    arrowprops=dict(arrowstyle="->", color="k"))
+    ax.set_aspect("equal")
+    ax.set_title("hinges: FDEM at collapse (red circles; numbers: order of opening), "
+                 "limit analysis (blue ×)", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(tmp / "hinges.png", dpi=120)
+    plt.close(fig)
+    (tmp / "report.md").write_text(_report(case, res, mag))
+
+
+def _report(case, res: Assessment, mag: float) -> str:
+    a, ld = case.arch, case.loading
+    kn = res.collapse_load / 1e3
+    lines = [f"# Assessment of `{case.name}`", ""]
+    lines += [
+        f"- Arch: {a.kind.value}, span {a.span:g} m, {a.rings} ring(s) of {a.ring_thickness:g} m, "
+        f"voussoirs {list(a.voussoirs)}, barrel width {a.width:g} m; {res.cells} triangles.",
+        f"- Load: {ld.control.value} control at {ld.position:g} of the span through a "
+        f"{ld.spreader_width:g} m spreader; self-weight {'on' if ld.self_weight else 'off'}.",
+        f"- Damage: {', '.join(d.kind.value for d in case.damage) or 'none'}; "
+        f"anchors: {len(case.anchor_specs)}.",
+        "",
+        "| quantity | value |",
+        "|---|---|",
+        f"| FDEM collapse load | **{kn:.2f} kN** ({kn / 9.80665:.2f} t) |",
+        f"| resolution | {res.resolution / 1e3:.2f} kN |",
+        f"| collapse reached | {'yes' if res.collapsed else 'no (limit of the run)'} |",
+    ]
+    if res.limit_load is not None:
+        lines.append(f"| limit analysis (rigid blocks, LP) | {res.limit_load / 1e3:.2f} kN |")
+        lines.append(f"| FDEM / limit analysis | {res.ratio:.3f} |")
+    elif res.limit_status:
+        lines.append(f"| limit analysis | {res.limit_status} |")
+    lines.append(f"| wall time | {res.elapsed:.0f} s |")
+    lines += ["", "## Load–displacement at the load line", "",
+              "![load-displacement](load_displacement.png)", "",
+              "## Hinge sequence", ""]
+    if res.events:
+        lines += ["| # | joint | kind | side | s | x, y [m] | load [kN] |",
+                  "|---|---|---|---|---|---|---|"]
+        for e in res.events:
+            lines.append(f"| {e.order} | {e.joint} | {e.kind} | {e.side} | {e.s:.3f} | "
+                         f"{e.position[0]:.3f}, {e.position[1]:.3f} | {e.load / 1e3:.2f} |")
+    else:
+        lines.append("No joint opened beyond the threshold.")
+    lines += ["", f"Open at collapse: {len(res.hinges_at_collapse)} joint(s). "
+              f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
+              "![hinges](hinges.png)", "",
+              f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
+              "", "Files: `curve.csv`, `hinges.csv`, `summary.json`.", ""]
+    return "\n".join(lines)
