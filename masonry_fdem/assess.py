@@ -73,7 +73,8 @@ class JointEvent:
         blocks: the two blocks.
         kind: "hinge" or "separation".
         side: "intrados" or "extrados" (hinge: the side that opens), "" (separation).
-        position: ``(x, y)`` [m] of the opening end (separation: the joint's midpoint).
+        position: ``(x, y)`` [m] of the hinge, the end the blocks rotate about (the
+            closed one, as the hinges of limit analysis); separation: the midpoint.
         s: the position along the arch, 0 left springing, 0.5 crown, 1 right springing.
         load: the load [N] of the first converged step with the joint open.
         displacement: the load-line displacement [m] then.
@@ -272,7 +273,7 @@ class _JointMonitor:
         i, label, blocks, _, _ = self.rows[k]
         if kind == "hinge":
             op = self.openings()[k]
-            pos = self.ends[k, int(np.argmax(op))]
+            pos = self.ends[k, int(np.argmin(op))]
         else:
             pos = self.ends[k].mean(axis=0)
         s = _arch_parameter(self.case.arch, self.ends[k].mean(axis=0))
@@ -366,6 +367,8 @@ def assess(
             callback({"load": load, "displacement": disp, "iterations": iterations})
 
     open_at_collapse: list = []
+    collapse, resolution, collapsed = 0.0, 0.0, False
+    drive_from = None  # load-line displacement [m] where displacement control starts
     if ld.control is LoadControl.LOAD:
         for p in points:
             model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
@@ -378,26 +381,35 @@ def assess(
                                    refinements=an.refinements, callback=on_step)
         collapse, resolution, collapsed = cres.load_factor, cres.resolution, cres.collapsed
         open_at_collapse = state["open"]
+        if collapsed and an.follow_peak:
+            # no equilibrium within the iteration limit is not yet proof that none
+            # exists (near the peak the structure is so soft that DR stalls): go on from
+            # the last equilibrium by driving the platen down
+            drive_from = disps[-1]
+            dstep = ld.displacement_increment or max(disps[-1], 1e-9) / 4.0
     else:
+        drive_from, dstep = 0.0, ld.displacement_increment
+    if drive_from is not None:
         sel = [int(n) for n in load_nodes]
         ids = comm.allgather([int(model.node_input[n]) for n in sel if n >= 0])
-        gids = {g for part in ids for g in part}
-        _prescribe_node_ids(model, gids, "platen")
+        _prescribe_node_ids(model, {g for part in ids for g in part}, "platen")
+        lf = collapse if ld.control is LoadControl.LOAD else 0.0
+        # the live load stays as it was; the platen's reaction adds to it
         dr = DynamicRelaxation(model, contact=inter, anchors=anchors, rtol=an.dr_rtol,
                                ke_tol=math.inf, max_iter=an.max_iterations,
                                damping="velocity")
-        peak, k_peak, falling, collapsed = 0.0, 0, 0, False
+        peak, k_peak, falling = collapse, len(loads) - 1, 0
         step = 0
         while True:
             step += 1
-            d = step * ld.displacement_increment
+            d = drive_from + step * dstep
             if ld.max_displacement is not None and d > ld.max_displacement * (1 + 1e-12):
                 break
-            r = dr.solve(0.0, displacement={"platen": (None, u_sw - d)})
+            r = dr.solve(lf, displacement={"platen": (None, u_sw - d)})
             if not r.converged:
                 collapsed = True
                 break
-            load = -float(dr.reactions()["platen"][1])
+            load = lf - float(dr.reactions()["platen"][1])
             record(load, r.iterations)
             if load > peak:
                 peak, k_peak, falling = load, len(loads) - 1, 0
@@ -407,9 +419,10 @@ def assess(
             if falling >= an.post_peak_steps or load < (1 - an.post_peak_drop) * peak:
                 collapsed = True
                 break
+        if peak > collapse or ld.control is LoadControl.DISPLACEMENT:
+            nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
+            resolution = max((abs(peak - x) for x in nb), default=peak)
         collapse = peak
-        nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
-        resolution = max((abs(peak - x) for x in nb), default=peak)
     if bar is not None:
         bar.close()
 

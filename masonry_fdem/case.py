@@ -72,7 +72,10 @@ Schema (``*``: required):
     self-weight state) at which an end of a joint counts as open (1e-5); ``penalty_factor``
     of the block contact at dry joints, × E/h (20); displacement control stops once the
     load has fallen for ``post_peak_steps`` (3) steps after the peak, or below
-    (1 − ``post_peak_drop``) (0.2) of it.
+    (1 − ``post_peak_drop``) (0.2) of it; ``follow_peak`` (true): under load control, when
+    an increment finds no equilibrium, go on from the last equilibrium under displacement
+    control (steps of ``displacement_increment``, default a quarter of the load-line
+    displacement reached) to find the peak and the post-peak branch.
 ``[[anchors]]``
     Repairs: ``layout``\\* "radial" (``angles``\\*: list of polar angles [deg] about the
     intrados centre, 90 = crown; ``cover`` [m] from intrados and extrados, 0.02) or
@@ -327,6 +330,7 @@ class AnalysisSpec:
     penalty_factor: float = 20.0
     post_peak_steps: int = 3
     post_peak_drop: float = 0.2
+    follow_peak: bool = True
 
 
 @dataclass(frozen=True)
@@ -717,7 +721,7 @@ _DAMAGE_KEYS = {
 }
 _ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "output",
                   "refinements", "hinge_opening", "penalty_factor", "post_peak_steps",
-                  "post_peak_drop")
+                  "post_peak_drop", "follow_peak")
 _ANCHOR_KEYS = ("layout", "angles", "cover", "start_angle", "end_angle", "depth", "pieces",
                 "diameter", "count", "prestress", "plates", "bond_diameter", "segment", "name",
                 "steel", "bond")
@@ -1081,7 +1085,8 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         an.number("hinge_opening", 1e-5, gt=0.0),
         an.number("penalty_factor", 20.0, gt=0.0),
         an.integer("post_peak_steps", 3, ge=1),
-        an.number("post_peak_drop", 0.2, gt=0.0))
+        an.number("post_peak_drop", 0.2, gt=0.0),
+        an.boolean("follow_peak", True))
     if analysis.post_peak_drop is not None and not analysis.post_peak_drop < 1.0:
         an.bad("post_peak_drop", f"must be < 1, got {analysis.post_peak_drop:g}")
     if not problems and None in (arch, mortar, ring, loading):

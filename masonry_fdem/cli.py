@@ -6,6 +6,9 @@ Subcommands:
 * ``masonry-fdem settle MESH.msh --material brick=2000,5e9,0.2 --fix-below 0.0`` — bring
   the blocks to equilibrium under self-weight by dynamic relaxation and write the
   history CSV, ParaView files and a picture to ``--out``;
+* ``masonry-fdem assess CASE.toml`` — load a masonry arch to collapse (see
+  :mod:`masonry_fdem.assess`); the run folder gets a report; ``masonry-fdem example``
+  prints the reference case file;
 * ``masonry-fdem precompile`` — compile the numba kernels before an MPI run.
 """
 
@@ -84,6 +87,34 @@ def cmd_settle(args) -> int:
     return 0 if dr.results[-1].converged else 1
 
 
+def cmd_assess(args) -> int:
+    from mpi4py import MPI
+
+    from masonry_fdem.assess import assess
+    from masonry_fdem.case import load_case
+
+    comm = MPI.COMM_WORLD
+    case = load_case(args.case)  # every problem of the file, before anything is written
+    res = assess(case, out=args.out, overwrite=args.overwrite,
+                 progress=False if args.quiet else None, comm=comm)
+    if comm.rank == 0:
+        line = (f"{case.name}: collapse load {res.collapse_load / 1e3:.2f} kN "
+                f"(resolution {res.resolution / 1e3:.2f} kN)")
+        if res.limit_load is not None:
+            line += f"; limit analysis {res.limit_load / 1e3:.2f} kN (ratio {res.ratio:.3f})"
+        print(line)
+        print(f"hinges at collapse: {', '.join(e.joint for e in res.hinges_at_collapse)}")
+        print(f"report: {res.report.resolve()}")
+    return 0
+
+
+def cmd_example(args) -> int:
+    from masonry_fdem.case import EXAMPLE_CASE
+
+    sys.stdout.write(EXAMPLE_CASE)
+    return 0
+
+
 def cmd_precompile(args) -> int:
     from masonry_fdem.precompile import precompile
 
@@ -119,6 +150,15 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--scale", type=float, default=100.0, help="picture magnification")
     q.add_argument("--out", default="out_settle")
     q.set_defaults(func=cmd_settle)
+    q = sub.add_parser("assess", help="load an arch case to collapse; report in a run folder")
+    q.add_argument("case", type=Path, help="case file (TOML; `masonry-fdem example`)")
+    q.add_argument("--out", type=Path, default=None,
+                   help="run folder (default: analysis.output of the case)")
+    q.add_argument("--overwrite", action="store_true", help="reuse a non-empty run folder")
+    q.add_argument("--quiet", action="store_true", help="no progress bar")
+    q.set_defaults(func=cmd_assess)
+    q = sub.add_parser("example", help="print the reference case file")
+    q.set_defaults(func=cmd_example)
     q = sub.add_parser("precompile", help="compile the numba kernels")
     q.set_defaults(func=cmd_precompile)
     return p

@@ -292,6 +292,8 @@ class Joints:
                 "blocks touch along joints but no joint material is given for the material "
                 f"pair(s) {sorted(missing)}; give a JointMaterial, or None for a dry joint")
         bonded = np.array([jm is not None for jm in chosen], dtype=bool)
+        # blocks with a dry joint keep their contact with every neighbour
+        self.dry_blocks = np.unique(np.r_[ba[~bonded], bb[~bonded]]).astype(np.int64)
         seg, fa, fb, mid = seg[bonded], fa[bonded], fb[bonded], mid[bonded]
         mats = [jm for jm in chosen if jm is not None]
         ba, bb = fblock[fa], fblock[fb]
@@ -484,6 +486,7 @@ class Joints:
         bonded = np.zeros(self.model.blocks.n_blocks, dtype=bool)
         bonded[self.seg_blocks.ravel()] = True
         bonded[self.seg_blocks[self.released].ravel()] = False
+        bonded[self.dry_blocks] = False
         c.bonded_block = bonded
         c.since = c.settings.rebuild_every  # rebuild before the next step
 

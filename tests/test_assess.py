@@ -1,0 +1,159 @@
+"""`assess`: arch to collapse against limit analysis, increment halving, ring separation,
+the command line on bad case files, one process against two (issue #8).
+
+The dry arch: span 2 m, one ring of 0.2 m in 12 voussoirs (E = 10 GPa), dry joints with
+tan φ = 10 (no tension, no sliding), a point load at quarter span. Its limit-analysis load
+is 5.11 kN. Load control in 2000 N increments stalls at 4 kN, where the arch is nearly
+a mechanism; the run goes on from there under displacement control and finds the peak.
+"""
+
+from __future__ import annotations
+
+import copy
+import re
+import math
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from masonry_fdem.assess import assess
+from masonry_fdem.case import CaseError, load_case
+from masonry_fdem.cli import main as cli_main
+
+DRY_ARCH = {
+    "arch": {"span": 2.0, "ring_thickness": 0.2, "voussoirs": 12, "abutment_height": 0.3,
+             "abutment_width": 0.4, "mesh_size": 0.2},
+    "materials": {"brick": {"density": 2000.0, "E": 10e9, "nu": 0.2},
+                  "abutment": {"density": 2000.0, "E": 30e9, "nu": 0.2}},
+    "joints": {"mortar": {"tan_phi": 10.0}},
+    "loading": {"position": 0.25, "increment": 2000.0, "displacement_increment": 1e-4},
+    "analysis": {"dr_rtol": 1e-4, "max_iterations": 60000, "refinements": 0,
+                 "post_peak_steps": 1},
+}
+
+
+def _case(data, increment=None, comm=MPI.COMM_WORLD):
+    d = copy.deepcopy(data)
+    if increment is not None:
+        d["loading"]["increment"] = increment
+    return load_case(d, name="dry_arch")
+
+
+@pytest.fixture(scope="module")
+def dry_runs():
+    """The dry arch in 2000 N and 1000 N increments (on all ranks of COMM_WORLD)."""
+    return {inc: assess(_case(DRY_ARCH, inc), write=False, progress=False)
+            for inc in (2000.0, 1000.0)}
+
+
+def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
+    res = dry_runs[2000.0]
+    assert res.limit_status == "collapse"
+    assert res.collapsed
+    # within 5 % of the rigid-block LP, and not above it
+    assert 0.95 <= res.ratio <= 1.0 + 1e-3, res.ratio
+    # four hinges, at the joints of the LP mechanism, about the same edge
+    hinges = [e for e in res.hinges_at_collapse if e.kind == "hinge"]
+    assert len(hinges) == 4, [(e.joint, e.kind) for e in res.hinges_at_collapse]
+    assert len(res.hinges_at_collapse) == 4
+    fdem = {tuple(sorted(e.blocks)): e.position for e in hinges}
+    lp = {tuple(sorted(b)): p for b, p in res.limit_hinges}
+    assert set(fdem) == set(lp)
+    for key, p in lp.items():
+        assert np.allclose(fdem[key], p, atol=1e-9), (key, fdem[key], p)
+    # the curve: rising to the peak, then falling (post-peak branch traced)
+    k = int(np.argmax(res.loads))
+    assert res.loads[k] == pytest.approx(res.collapse_load)
+    assert 0 < k < len(res.loads) - 1
+    assert res.loads[-1] < res.collapse_load
+    assert np.all(np.diff(res.displacements[: k + 1]) > 0)
+
+
+def test_halving_the_load_increment(dry_runs):
+    a, b = dry_runs[2000.0].collapse_load, dry_runs[1000.0].collapse_load
+    assert abs(a - b) / a < 0.03, (a, b)
+
+
+def test_ring_separation_lowers_the_collapse_load():
+    """Three rings of 0.15 m, dry radial joints; the ring interfaces bonded by a strong
+    mortar, or separated (frictional contact). Both are loaded in 5 kN increments to
+    15 kN with the same iteration limit (the separated arch collapses near 11.6 kN when
+    followed to its peak under displacement control; the bonded one carries 92 kN)."""
+    base = {
+        "arch": {"span": 2.0, "rings": 3, "ring_thickness": 0.15, "voussoirs": [8, 9, 10],
+                 "abutment_height": 0.3, "abutment_width": 0.6, "mesh_size": 0.15},
+        "materials": copy.deepcopy(DRY_ARCH["materials"]),
+        "joints": {"mortar": {"tan_phi": 0.8},
+                   "ring": {"type": "bonded", "ft": 1e6, "GfI": 100.0, "c": 1e6,
+                            "GfII": 500.0, "tan_phi": 0.8}},
+        "loading": {"position": 0.25, "increment": 5000.0, "max_load": 15000.0},
+        "analysis": {"dr_rtol": 1e-4, "max_iterations": 40000, "refinements": 0,
+                     "friction": 0.8, "limit_analysis": False, "follow_peak": False},
+    }
+    sep = copy.deepcopy(base)
+    sep["damage"] = [{"type": "ring_separation", "rings": "all"}]
+    r_sep = assess(load_case(sep, name="separated"), write=False, progress=False)
+    r_bond = assess(load_case(base, name="bonded"), write=False, progress=False)
+    assert r_sep.collapsed and r_sep.collapse_load < 15000.0
+    assert not r_bond.collapsed and r_bond.collapse_load == pytest.approx(15000.0)
+    assert r_sep.collapse_load < r_bond.collapse_load
+
+
+BAD_CASES = [
+    ("[arch]\nspan = 2.0\nring_thickness = 0.2\nvoussoirs = 8\nabutment_height = 0.3\n"
+     "colour = 'red'\n[materials.brick]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n"
+     "[materials.abutment]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n[joints.mortar]\n",
+     "unknown key 'colour' in [arch]"),
+    ("[arch]\nspan = 2.0\nring_thickness = 0.2\nvoussoirs = 8\nabutment_height = 0.3\n"
+     "[materials.brick]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n[joints.mortar]\n",
+     "abutment"),
+    ("[arch]\nspan = 2.0\nring_thickness = 0.2\nvoussoirs = 8\nabutment_height = 0.3\n"
+     "[materials.brick]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n"
+     "[materials.abutment]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n[joints.mortar]\n"
+     "[loading]\nposition = 1.4\n", "loading.position"),
+    ("[arch]\nspan = 2.0\nring_thickness = -0.2\nvoussoirs = 8\nabutment_height = 0.3\n"
+     "[materials.brick]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n"
+     "[materials.abutment]\ndensity = 2000.0\nE = 1e10\nnu = 0.2\n[joints.mortar]\n",
+     "arch.ring_thickness"),
+]
+
+
+@pytest.mark.parametrize("text,names", BAD_CASES,
+                         ids=["unknown_key", "missing_material", "load_off_arch",
+                              "negative_thickness"])
+def test_cli_rejects_bad_case_and_writes_nothing(tmp_path, capsys, text, names):
+    comm = MPI.COMM_WORLD
+    root = comm.bcast(str(tmp_path) if comm.rank == 0 else None, root=0)
+    from pathlib import Path
+
+    root = Path(root)
+    f = root / "bad.toml"
+    if comm.rank == 0:
+        f.write_text(text + f"[analysis]\noutput = '{root / 'run'}'\n"
+                     if "[analysis]" not in text else text)
+    comm.barrier()
+    code = cli_main(["assess", str(f), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2
+    if comm.rank == 0:
+        assert names in err, err
+        assert "error" in err
+    comm.barrier()
+    assert sorted(p.name for p in root.iterdir()) == ["bad.toml"]
+    with pytest.raises(CaseError, match=re.escape(names)):
+        load_case(f)
+
+
+def test_one_process_and_two_give_the_same_collapse_load(dry_runs):
+    """Under mpirun the dry arch is run again on each rank alone (COMM_SELF)."""
+    comm = MPI.COMM_WORLD
+    if comm.size == 1:
+        pytest.skip("compares a parallel run with a serial one: run under mpirun -n 2")
+    serial = assess(_case(DRY_ARCH, 2000.0), write=False, progress=False, comm=MPI.COMM_SELF)
+    par = dry_runs[2000.0]
+    assert math.isclose(serial.collapse_load, par.collapse_load, rel_tol=2e-3), (
+        serial.collapse_load, par.collapse_load)
+    assert [e.joint for e in serial.hinges_at_collapse] == [
+        e.joint for e in par.hinges_at_collapse]
