@@ -29,6 +29,7 @@ precompile: venv
 	$(PY) -m masonry_fdem.precompile
 
 demo: precompile
+	$(MPIRUN) -n $(NP) $(PY) demos/assess_arch.py --out out_assess_arch
 	$(MPIRUN) -n $(NP) $(PY) demos/settle_arch.py --out out_settle_arch
 	$(MPIRUN) -n $(NP) $(PY) demos/topple_wall.py --out out_topple_wall
 	$(MPIRUN) -n $(NP) $(PY) demos/shear_wall.py --out out_shear_wall

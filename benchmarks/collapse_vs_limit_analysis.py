@@ -33,7 +33,6 @@ from masonry_fdem.geometry import BlockLayout, arch_layout, rectangle
 from masonry_fdem.limit_analysis import limit_analysis
 from masonry_fdem.solvers import DynamicRelaxation
 
-
 ARCH_E = 10e9
 
 

@@ -593,6 +593,9 @@ def _report(case, res: Assessment, mag: float) -> str:
         f"voussoirs {list(a.voussoirs)}, barrel width {a.width:g} m; {res.cells} triangles.",
         f"- Load: {ld.control.value} control at {ld.position:g} of the span through a "
         f"{ld.spreader_width:g} m spreader; self-weight {'on' if ld.self_weight else 'off'}.",
+        f"- Ring interfaces: {case.ring_joint_type}"
+        f"{'' if a.rings > 1 else ' (one ring)'}; radial joints: "
+        f"{'bonded mortar' if case.mortar.bonded else 'dry'}, tan φ {case.mortar.tan_phi:g}.",
         f"- Damage: {', '.join(d.kind.value for d in case.damage) or 'none'}; "
         f"anchors: {len(case.anchor_specs)}.",
         "",
@@ -605,6 +608,10 @@ def _report(case, res: Assessment, mag: float) -> str:
     if res.limit_load is not None:
         lines.append(f"| limit analysis (rigid blocks, LP) | {res.limit_load / 1e3:.2f} kN |")
         lines.append(f"| FDEM / limit analysis | {res.ratio:.3f} |")
+    elif res.limit_status == "infeasible":
+        lines.append(f"| limit analysis | infeasible: the rigid blocks, with friction "
+                     f"{case.analysis.friction:g} and no bond, find no equilibrium even "
+                     "without the live load (the FDEM model has the mortar's bond) |")
     elif res.limit_status:
         lines.append(f"| limit analysis | {res.limit_status} |")
     lines.append(f"| wall time | {res.elapsed:.0f} s |")
@@ -612,7 +619,7 @@ def _report(case, res: Assessment, mag: float) -> str:
               "![load-displacement](load_displacement.png)", "",
               "## Hinge sequence", ""]
     if res.events:
-        lines += ["| # | joint | kind | side | s | x, y [m] | load [kN] |",
+        lines += ["| # | joint | kind | opens at | s | hinge x, y [m] | load [kN] |",
                   "|---|---|---|---|---|---|---|"]
         for e in res.events:
             lines.append(f"| {e.order} | {e.joint} | {e.kind} | {e.side} | {e.s:.3f} | "

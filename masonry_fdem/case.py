@@ -135,7 +135,9 @@ TONNE_FORCE = 1000.0 * G
 
 EXAMPLE_CASE = """\
 # Reference case: three-ring brick arch with wet sand between the rings (ring separation),
-# loaded to collapse at quarter span in 1 tonne increments (TRL test, Owen et al.).
+# loaded to collapse at quarter span in 1 tonne increments (after the TRL tests of
+# multi-ring arches, Owen et al.). Coarse: one triangle through each ring (~5 min on
+# 2 cores); refine mesh_size and dr_rtol for a study.
 
 [arch]
 kind = "semicircular"          # semicircular | segmental (needs rise) | pointed (needs rise)
@@ -148,7 +150,7 @@ segments = 1                   # straight pieces per voussoir face
 abutment_height = 0.5          # [m]
 abutment_width = 0.6           # [m], from the intrados springing outward
 width = 1.0                    # barrel width, out of plane [m]
-mesh_size = 0.03               # [m]
+mesh_size = 0.11               # [m]
 voussoir_material = "brick"
 abutment_material = "abutment"
 
@@ -185,12 +187,16 @@ increment = 9806.65            # 1 tonne [N]
 max_load = 490332.5            # 50 tonnes [N]
 self_weight = true
 control = "load"               # load | displacement (then displacement_increment [m])
+# displacement_increment = 3e-5  # [m]; under load control: the steps after a stall
 
 [analysis]
 limit_analysis = true
-friction = 0.6
-dr_rtol = 1e-6
-max_iterations = 200000
+friction = 0.6                 # of the rigid-block limit analysis (no bond)
+dr_rtol = 1e-4                 # out-of-balance force / applied load
+max_iterations = 60000         # per increment; beyond: no equilibrium found
+refinements = 0                # halvings of an increment that finds no equilibrium
+follow_peak = true             # then go on under displacement control to the peak
+post_peak_steps = 2
 # output = "runs/arch"         # default: runs/<case file stem>
 
 # Damage, any number of entries:

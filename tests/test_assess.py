@@ -10,8 +10,8 @@ a mechanism; the run goes on from there under displacement control and finds the
 from __future__ import annotations
 
 import copy
-import re
 import math
+import re
 
 from mpi4py import MPI
 
