@@ -157,3 +157,38 @@ def test_one_process_and_two_give_the_same_collapse_load(dry_runs):
         serial.collapse_load, par.collapse_load)
     assert [e.joint for e in serial.hinges_at_collapse] == [
         e.joint for e in par.hinges_at_collapse]
+
+
+def test_damage_scenarios_reach_the_model():
+    """Each damage kind changes the FDEM model as the case says: a missing brick is one
+    block fewer; an open joint, ring separation over a zone and decayed mortar leave the
+    bonded joints of the undamaged arch fewer or weaker (the model is built, not run;
+    here the ring interfaces are bonded by the mortar too)."""
+    from masonry_fdem.assess import build_model
+
+    base = {
+        "arch": {"span": 2.0, "rings": 2, "ring_thickness": 0.15, "voussoirs": [8, 9],
+                 "abutment_height": 0.3, "abutment_width": 0.5, "mesh_size": 0.15},
+        "materials": copy.deepcopy(DRY_ARCH["materials"]),
+        "joints": {"mortar": {"ft": 0.1e6, "GfI": 10.0, "c": 0.15e6, "GfII": 50.0}},
+        "analysis": {"limit_analysis": False},
+    }
+
+    def build(damage):
+        d = copy.deepcopy(base)
+        d["damage"] = damage
+        model, (contact, joints), _ = build_model(load_case(d, name="damaged"))
+        ft = set(np.round(joints.props[:, 2]).tolist())  # tensile strengths in use [Pa]
+        return model.blocks.n_blocks, joints.n_segments, ft
+
+    nb0, ns0, st0 = build([])
+    nb, ns, _ = build([{"type": "missing_brick", "ring": 0, "index": 3}])
+    assert nb == nb0 - 1 and ns < ns0
+    nb, ns, _ = build([{"type": "open_joint", "ring": 1, "index": 4}])
+    assert nb == nb0 and ns < ns0
+    _, ns_half, _ = build([{"type": "ring_separation", "from": 0.0, "to": 0.5}])
+    _, ns_all, _ = build([{"type": "ring_separation"}])
+    assert ns_all < ns_half < ns0
+    _, ns, ft = build([{"type": "decayed_mortar", "factor": 0.5, "from": 0.2, "to": 0.6}])
+    assert ns == ns0
+    assert st0 == {0.1e6} and ft == {0.1e6, 0.05e6}
