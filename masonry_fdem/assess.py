@@ -487,10 +487,16 @@ def _write(case, res: Assessment, folder: Path, overwrite, model, inter, anchors
     from masonry_fdem.io import plot_blocks
 
     tmp = folder.parent / f".{folder.name}.partial"
+    error = None
     if comm.rank == 0:
         shutil.rmtree(tmp, ignore_errors=True)
-        tmp.mkdir(parents=True)
-    comm.barrier()
+        try:
+            tmp.mkdir(parents=True)
+        except OSError as exc:
+            error = f"cannot create {tmp}: {exc.strerror or exc}"
+    error = comm.bcast(error, root=0)
+    if error:
+        raise RuntimeError(error)
     try:
         span = case.arch.span
         u = model.gather_nodal(model.u.x.array)
@@ -500,14 +506,19 @@ def _write(case, res: Assessment, folder: Path, overwrite, model, inter, anchors
         plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
                     title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
                     joints=inter[1], anchors=anchors)
-        if comm.rank == 0:
-            _write_rank0(case, res, tmp, mag)
-        comm.barrier()
-        if comm.rank == 0:
-            folder.mkdir(parents=True, exist_ok=True)
-            for f in sorted(tmp.iterdir()):
-                f.replace(folder / f.name)
-            tmp.rmdir()
+        error = None
+        if comm.rank == 0:  # the other ranks must not wait for a rank that failed
+            try:
+                _write_rank0(case, res, tmp, mag)
+                folder.mkdir(parents=True, exist_ok=True)
+                for f in sorted(tmp.iterdir()):
+                    f.replace(folder / f.name)
+                tmp.rmdir()
+            except Exception as exc:
+                error = f"writing the run folder {folder}: {exc!r}"
+        error = comm.bcast(error, root=0)
+        if error:
+            raise RuntimeError(error)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(tmp, ignore_errors=True)

@@ -95,8 +95,13 @@ def cmd_assess(args) -> int:
 
     comm = MPI.COMM_WORLD
     case = load_case(args.case)  # every problem of the file, before anything is written
-    res = assess(case, out=args.out, overwrite=args.overwrite,
-                 progress=False if args.quiet else None, comm=comm)
+    try:
+        res = assess(case, out=args.out, overwrite=args.overwrite,
+                     progress=False if args.quiet else None, comm=comm)
+    except RuntimeError as exc:  # no equilibrium under self-weight, a folder not written
+        if comm.rank == 0:
+            print(f"masonry-fdem: {exc}", file=sys.stderr)
+        return 1
     if comm.rank == 0:
         line = (f"{case.name}: collapse load {res.collapse_load / 1e3:.2f} kN "
                 f"(resolution {res.resolution / 1e3:.2f} kN)")

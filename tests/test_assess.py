@@ -29,7 +29,7 @@ DRY_ARCH = {
                   "abutment": {"density": 2000.0, "E": 30e9, "nu": 0.2}},
     "joints": {"mortar": {"tan_phi": 10.0}},
     "loading": {"position": 0.25, "increment": 2000.0, "displacement_increment": 1e-4},
-    "analysis": {"dr_rtol": 1e-4, "max_iterations": 60000, "refinements": 0,
+    "analysis": {"dr_rtol": 1e-4, "max_iterations": 40000, "refinements": 0,
                  "post_peak_steps": 1},
 }
 
@@ -42,14 +42,40 @@ def _case(data, increment=None, comm=MPI.COMM_WORLD):
 
 
 @pytest.fixture(scope="module")
-def dry_runs():
-    """The dry arch in 2000 N and 1000 N increments (on all ranks of COMM_WORLD)."""
-    return {inc: assess(_case(DRY_ARCH, inc), write=False, progress=False)
-            for inc in (2000.0, 1000.0)}
+def dry_runs(tmp_path_factory):
+    """The dry arch in 2000 N and 1000 N increments (on all ranks of COMM_WORLD); the
+    first writes its run folder."""
+    comm = MPI.COMM_WORLD
+    root = comm.bcast(str(tmp_path_factory.mktemp("dry")) if comm.rank == 0 else None)
+    from pathlib import Path
+
+    out = Path(root) / "run"
+    runs = {2000.0: assess(_case(DRY_ARCH, 2000.0), out=out, progress=False)}
+    runs[1000.0] = assess(_case(DRY_ARCH, 1000.0), write=False, progress=False)
+    return runs
+
+
+def test_run_folder_is_complete(dry_runs):
+    res = dry_runs[2000.0]
+    folder = res.folder
+    names = sorted(p.name for p in folder.iterdir())
+    assert names == ["curve.csv", "hinges.csv", "hinges.png", "load_displacement.png",
+                     "mechanism.png", "report.md", "summary.json"]
+    assert not any(p.name.endswith(".partial") for p in folder.parent.iterdir())
+    text = (folder / "report.md").read_text()
+    assert f"**{res.collapse_load / 1e3:.2f} kN**" in text
+    assert f"{res.limit_load / 1e3:.2f} kN" in text
+    curve = np.loadtxt(folder / "curve.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(curve[:, 0], res.loads, rtol=1e-5)
+    assert len((folder / "hinges.csv").read_text().splitlines()) == 1 + len(res.events)
 
 
 def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
     res = dry_runs[2000.0]
+    print(f"\ndry arch: FDEM {res.collapse_load:.1f} N (resolution {res.resolution:.1f} N), "
+          f"LP {res.limit_load:.1f} N, ratio {res.ratio:.4f}; open at collapse: "
+          + ", ".join(f"{e.joint} {e.kind} opens {e.side}" for e in res.hinges_at_collapse)
+          + f"; DR iterations per step {res.iterations}")
     assert res.limit_status == "collapse"
     assert res.collapsed
     # within 5 % of the rigid-block LP, and not above it
@@ -73,6 +99,7 @@ def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
 
 def test_halving_the_load_increment(dry_runs):
     a, b = dry_runs[2000.0].collapse_load, dry_runs[1000.0].collapse_load
+    print(f"\nincrement 2000 N: {a:.2f} N, 1000 N: {b:.2f} N, change {abs(a - b) / a:.2e}")
     assert abs(a - b) / a < 0.03, (a, b)
 
 
@@ -96,6 +123,8 @@ def test_ring_separation_lowers_the_collapse_load():
     sep["damage"] = [{"type": "ring_separation", "rings": "all"}]
     r_sep = assess(load_case(sep, name="separated"), write=False, progress=False)
     r_bond = assess(load_case(base, name="bonded"), write=False, progress=False)
+    print(f"\nring-separated: {r_sep.collapse_load:.0f} N (collapsed {r_sep.collapsed}), "
+          f"bonded: {r_bond.collapse_load:.0f} N (collapsed {r_bond.collapsed})")
     assert r_sep.collapsed and r_sep.collapse_load < 15000.0
     assert not r_bond.collapsed and r_bond.collapse_load == pytest.approx(15000.0)
     assert r_sep.collapse_load < r_bond.collapse_load
@@ -153,6 +182,8 @@ def test_one_process_and_two_give_the_same_collapse_load(dry_runs):
         pytest.skip("compares a parallel run with a serial one: run under mpirun -n 2")
     serial = assess(_case(DRY_ARCH, 2000.0), write=False, progress=False, comm=MPI.COMM_SELF)
     par = dry_runs[2000.0]
+    print(f"\none process {serial.collapse_load:.3f} N, {comm.size} processes "
+          f"{par.collapse_load:.3f} N")
     assert math.isclose(serial.collapse_load, par.collapse_load, rel_tol=2e-3), (
         serial.collapse_load, par.collapse_load)
     assert [e.joint for e in serial.hinges_at_collapse] == [
