@@ -168,19 +168,6 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
 
     table = {k: bond(v) for k, v in case.joint_materials().items()}
     rules = [(where, bond(jm)) for where, jm in case.joint_rules(layout)]
-    if case.ring_joint_type == "sand" or case.arch.rings > 1:
-        # ring interfaces not named by a rule: the ring joint of the case
-        from masonry_fdem.limit_analysis import find_interfaces
-
-        itf = find_interfaces(layout)
-        ring = [i for i in range(itf.size)
-                if (_classify(layout.names[itf.block_a[i]], layout.names[itf.block_b[i]],
-                              case.arch) or ("",))[0] == "ring"]
-        if ring:
-            from masonry_fdem.case import _on_segments
-
-            rules.append((_on_segments(itf.start[ring], itf.end[ring],
-                                       1e-6 * case.arch.span), bond(case.ring_joint)))
     joints = Joints(model, table, where=rules, contact=contact)
     specs = case.anchors()
     anchors = Anchors(model, specs) if specs else None
@@ -255,8 +242,8 @@ class _JointMonitor:
         rel = du[:, :, 1, :] - du[:, :, 0, :]
         return np.einsum("kej,kj->ke", rel, self.normal) - self.base
 
-    def classify(self, tol: float) -> list[tuple[int, str, str]]:
-        """``(row, kind, side)`` of the joints open beyond ``tol`` [m]."""
+    def classify(self, tol: float) -> tuple[list[tuple[int, str, str]], np.ndarray]:
+        """``(row, kind, side)`` of the joints open beyond ``tol`` [m], and the openings."""
         out = []
         op = self.openings()
         for k in range(len(self.rows)):
@@ -266,14 +253,14 @@ class _JointMonitor:
             elif o.max() > tol:
                 end = int(np.argmax(o))
                 out.append((k, "hinge", "intrados" if end == self.side[k] else "extrados"))
-        return out
+        return out, op
 
     def event(self, k: int, kind: str, side: str, order: int, load: float,
-              disp: float) -> JointEvent:
-        i, label, blocks, _, _ = self.rows[k]
+              disp: float, opening: np.ndarray) -> JointEvent:
+        """The event of joint k, its ``opening`` at both ends [m] given."""
+        _, label, blocks, _, _ = self.rows[k]
         if kind == "hinge":
-            op = self.openings()[k]
-            pos = self.ends[k, int(np.argmin(op))]
+            pos = self.ends[k, int(np.argmin(opening))]
         else:
             pos = self.ends[k].mean(axis=0)
         s = _arch_parameter(self.case.arch, self.ends[k].mean(axis=0))
@@ -354,12 +341,13 @@ def assess(
         loads.append(float(load))
         disps.append(float(disp))
         iters.append(int(iterations))
-        opened = monitor.classify(an.hinge_opening)
-        state["open"] = [(k, kind, side, load, disp) for k, kind, side in opened]
+        opened, op = monitor.classify(an.hinge_opening)
+        state["open"] = [(k, kind, side, load, disp, op[k]) for k, kind, side in opened]
         for k, kind, side in opened:
             if k not in seen:
                 seen.add(k)
-                events.append(monitor.event(k, kind, side, len(events) + 1, load, disp))
+                events.append(monitor.event(k, kind, side, len(events) + 1, load, disp,
+                                            op[k]))
         if bar is not None:
             bar.update(load / scale, f"{load / 1e3:8.2f} kN  {disp * 1e3:7.3f} mm  "
                        f"{len(seen)} joints open")
@@ -426,8 +414,8 @@ def assess(
     if bar is not None:
         bar.close()
 
-    hinges_now = [monitor.event(k, kind, side, 0, load, disp)
-                  for k, kind, side, load, disp in open_at_collapse]
+    hinges_now = [monitor.event(k, kind, side, 0, load, disp, op)
+                  for k, kind, side, load, disp, op in open_at_collapse]
     result = Assessment(
         case=case.name, control=ld.control.value, collapse_load=float(collapse),
         resolution=float(resolution), collapsed=bool(collapsed),
