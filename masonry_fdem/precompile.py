@@ -34,6 +34,7 @@ def precompile() -> None:
                               np.zeros(K.N_ENERGY))
     K.dr_measure(u, u, v, f, f, f, m, mask, np.zeros(4))
     K.dr_update(u, v, f, f, m, mask, 0.0, 1.0, True)
+    K.dr_velocity_quotient(v, f, f.copy(), m, mask, True, np.zeros(6)[4:])
     xy = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
     cells = np.array([[0, 1, 2]], dtype=np.int64)
     one = np.ones(1)

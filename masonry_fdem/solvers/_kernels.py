@@ -110,6 +110,24 @@ def dr_measure(u, u0, v, f_int, f_int0, f_ext, mfict, presc, out):
 
 
 @njit(cache=True)
+def dr_velocity_quotient(v, f, f_prev, mfict, presc, first, out):
+    """The velocity Rayleigh quotient's parts over the free dofs, then ``f_prev = f``.
+
+    out[0] = vᵀ (f − f_prev) = vᵀ K v (v = u − u_prev with dt = 1), out[1] = vᵀ M v; both
+    zero on the ``first`` iteration, where there is no previous force yet.
+    """
+    num = 0.0
+    den = 0.0
+    for i in range(v.size):
+        if not first and not presc[i]:
+            num += v[i] * (f[i] - f_prev[i])
+            den += mfict[i] * v[i] * v[i]
+        f_prev[i] = f[i]
+    out[0] = num
+    out[1] = den
+
+
+@njit(cache=True)
 def dr_update(u, v, f_int, f_ext, mfict, presc, c, dt, first):
     """Underwood's DR update: v(n+1/2) = ((2 − c dt) v(n−1/2) + 2 dt r/m) / (2 + c dt).
 

@@ -162,10 +162,10 @@ class DynamicRelaxation:
         self.v = np.zeros_like(model.f_int)
         self.f_int0 = np.zeros_like(model.f_int)
         self._fprev = np.zeros_like(model.f_int)
-        self._free = np.zeros(0, dtype=bool)
         self.f_ext = np.zeros_like(model.f_int)
         self.f_net = np.zeros_like(model.f_int)  # f_int − f_contact
         self._sums = np.zeros(6)
+        self._vsums = self._sums[4:]  # the velocity quotient's parts
         self.results: list[DRResult] = []
         self.disks = disks
         if disks is not None:
@@ -214,8 +214,6 @@ class DynamicRelaxation:
         u = m.u.x.array
         u0 = u.copy()
         by_velocity = self.damping == "velocity"
-        if by_velocity:
-            self._free = self.presc == 0
         self.v[:] = 0.0
         d = self.disks
         if d is not None:
@@ -243,11 +241,8 @@ class DynamicRelaxation:
             K.dr_measure(u, u0, self.v, f_net, self.f_int0, self.f_ext, self.mfict,
                          self.presc, self._sums)
             if by_velocity:
-                fr = self._free
-                vf = self.v[fr]
-                self._sums[4] = np.dot(vf, f_net[fr] - self._fprev[fr]) if it > 1 else 0.0
-                self._sums[5] = np.dot(vf * self.mfict[fr], vf) if it > 1 else 0.0
-                self._fprev[:] = f_net
+                K.dr_velocity_quotient(self.v, f_net, self._fprev, self.mfict, self.presc,
+                                       it == 1, self._vsums)
             r2, num, den, ke, num_v, den_v = comm.allreduce(self._sums)
             if by_velocity:
                 num, den = num_v, den_v
