@@ -60,7 +60,7 @@ from masonry_fdem.case import (
 )
 from masonry_fdem.geometry.arches import ArchKind
 
-__all__ = ["Assessment", "JointEvent", "assess", "build_model"]
+__all__ = ["Assessment", "JointEvent", "anchor_state", "assess", "build_model"]
 
 
 @dataclass(frozen=True)
@@ -112,6 +112,9 @@ class Assessment:
             its LP status and ``limit_hinges`` its hinges (``(blocks, position)``).
         folder, report: the run folder and ``report.md`` (None if not written).
         cells, elapsed: the mesh size and the wall time [s].
+        anchors: per anchor at the collapse state (see :func:`anchor_state`); empty
+            without anchors.
+        anchor_length: Σ count × length of the anchors [m] (0 without anchors).
     """
 
     case: str
@@ -132,6 +135,8 @@ class Assessment:
     report: Path | None = None
     cells: int = 0
     elapsed: float = 0.0
+    anchors: list[dict] = field(default_factory=list)
+    anchor_length: float = 0.0
 
     @property
     def ratio(self) -> float | None:
@@ -323,6 +328,13 @@ def assess(
     dr = DynamicRelaxation(model, contact=inter, anchors=anchors, rtol=an.dr_rtol,
                            ke_tol=math.inf, max_iter=an.max_iterations, damping="velocity")
     res = dr.solve(0.0)
+    if res.converged and anchors is not None and any(a.prestress > 0 for a in anchors.anchors):
+        # prestressed anchors: equilibrium under self-weight and the jacking forces, then
+        # lock-off (the bond acts from here on) and equilibrium again
+        anchors.lock_off()
+        it0 = res.iterations
+        res = dr.solve(0.0)
+        res.iterations += it0
     if not res.converged:
         raise RuntimeError(f"{case.name}: no equilibrium under self-weight "
                            f"({res.iterations} iterations); the arch cannot stand")
@@ -330,7 +342,7 @@ def assess(
     loads, disps, iters = [0.0], [0.0], [res.iterations]
     events: list[JointEvent] = []
     seen: set[int] = set()
-    state = {"open": []}
+    state: dict[str, Any] = {"open": [], "anchors": []}
 
     # load-line displacement: mean vertical displacement of the nodes nearest the points
     load_nodes = [model._nearest_node(p, "voussoir:*") for p in points]
@@ -343,6 +355,8 @@ def assess(
         iters.append(int(iterations))
         opened, op = monitor.classify(an.hinge_opening)
         state["open"] = [(k, kind, side, load, disp, op[k]) for k, kind, side in opened]
+        if anchors is not None:
+            state["anchors"] = anchor_state(anchors)
         for k, kind, side in opened:
             if k not in seen:
                 seen.add(k)
@@ -355,6 +369,7 @@ def assess(
             callback({"load": load, "displacement": disp, "iterations": iterations})
 
     open_at_collapse: list = []
+    anchors_at_collapse: list = state["anchors"]
     collapse, resolution, collapsed = 0.0, 0.0, False
     drive_from = None  # load-line displacement [m] where displacement control starts
     if ld.control is LoadControl.LOAD:
@@ -369,12 +384,15 @@ def assess(
                                    refinements=an.refinements, callback=on_step)
         collapse, resolution, collapsed = cres.load_factor, cres.resolution, cres.collapsed
         open_at_collapse = state["open"]
+        anchors_at_collapse = state["anchors"]
         if collapsed and an.follow_peak:
             # no equilibrium within the iteration limit is not yet proof that none
             # exists (near the peak the structure is so soft that DR stalls): go on from
             # the last equilibrium by driving the platen down
             drive_from = disps[-1]
-            dstep = ld.displacement_increment or max(disps[-1], 1e-9) / 4.0
+            # (a quarter of the displacement reached, but not below span/1e5 when the
+            # first increment already failed)
+            dstep = ld.displacement_increment or max(disps[-1] / 4.0, 1e-5 * case.arch.span)
     else:
         drive_from, dstep = 0.0, ld.displacement_increment
     if drive_from is not None:
@@ -402,10 +420,14 @@ def assess(
             if load > peak:
                 peak, k_peak, falling = load, len(loads) - 1, 0
                 open_at_collapse = state["open"]
+                anchors_at_collapse = state["anchors"]
             else:
                 falling += 1
             if falling >= an.post_peak_steps or load < (1 - an.post_peak_drop) * peak:
                 collapsed = True
+                break
+            if ld.max_load is not None and load >= ld.max_load:
+                collapsed = False  # carries the load asked for; no collapse sought
                 break
         if peak > collapse or ld.control is LoadControl.DISPLACEMENT:
             nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
@@ -423,11 +445,38 @@ def assess(
         events=events, hinges_at_collapse=hinges_now, limit_load=limit_load,
         limit_status=None if la is None else str(la.status),
         limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
-        cells=int(model.blocks.n_cells))
+        cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
+        anchor_length=0.0 if anchors is None else anchors.total_length)
     result.elapsed = time.perf_counter() - t_start
     if write:
         _write(case, result, folder, overwrite, model, inter, anchors, comm)
     return result
+
+
+def anchor_state(anchors) -> list[dict]:
+    """The state of each anchor (collective): ``name``, ``length`` [m], ``count``,
+    ``distance`` [m] of the bar nodes from the anchor's start, ``force`` [N per bar] of
+    each bar element (tension positive), ``slip`` [m] at each node, ``force_max`` [N],
+    ``slip_max`` [m], ``yield_force`` [N], ``yielded`` and ``ruptured`` element counts."""
+    from masonry_fdem import _anchor_kernels as AK
+
+    nodes = anchors.node_results()
+    force = anchors.axial_force()
+    out = []
+    for k, a in enumerate(anchors.anchors):
+        nn, ee = anchors.anchor_nodes[k], anchors.anchor_elements[k]
+        x = anchors.x[nn]
+        dist = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(x, axis=0), axis=1))]
+        f, slip = force[ee], nodes["slip"][nn]
+        out.append({
+            "name": a.name, "length": float(a.length), "count": float(a.count),
+            "distance": dist.tolist(), "force": f.tolist(), "slip": slip.tolist(),
+            "force_max": float(f.max()), "slip_max": float(np.abs(slip).max()),
+            "yield_force": float(a.yield_force),
+            "yielded": int(np.count_nonzero(anchors.es[ee, AK.ES_ALPHA] > 0)),
+            "ruptured": int(np.count_nonzero(anchors.ruptured()[ee])),
+        })
+    return out
 
 
 def _mean_uy(model, nodes) -> float:

@@ -46,7 +46,8 @@ Schema (``*``: required):
     A vertical load on the extrados, raised in increments. ``position`` fraction of the
     span from the left springing (0.25) *or* ``x`` horizontal distance from the left
     intrados springing [m]; ``spreader_width`` [m] (0: point load); ``increment`` [N]
-    (9806.65, one tonne-force); ``max_load`` [N] (none: until collapse); ``self_weight``
+    (9806.65, one tonne-force); ``max_load`` [N] (none: until collapse; under
+    displacement control the run also ends once the load reaches it); ``self_weight``
     (true); ``control`` "load" (default) or "displacement"; ``displacement_increment``
     [m] (required for displacement control); ``max_displacement`` [m] (none).
 ``[[damage]]``
@@ -107,7 +108,14 @@ from typing import Any
 
 import numpy as np
 
-from masonry_fdem.anchors import Anchor, BondLaw, SteelLaw, intrados_stitch, radial_anchors
+from masonry_fdem.anchors import (
+    Anchor,
+    BondLaw,
+    SteelLaw,
+    inclined_anchors,
+    intrados_stitch,
+    radial_anchors,
+)
 from masonry_fdem.constants import G
 from masonry_fdem.contact.joints import JointMaterial
 from masonry_fdem.geometry.arches import ArchKind, _ring_pieces, arch_layout
@@ -118,7 +126,10 @@ __all__ = [
     "EXAMPLE_CASE",
     "TONNE_FORCE",
     "AnalysisSpec",
+    "AnchorLayout",
     "AnchorSpec",
+    "Objective",
+    "SearchSpec",
     "ArchCase",
     "ArchSpec",
     "CaseError",
@@ -353,6 +364,9 @@ class AnchorSpec:
     end_angle: float | None = None
     depth: float | None = None
     pieces: int | None = None
+    positions: tuple[float, ...] = ()
+    inclination: float = 90.0
+    length: float | None = None
     count: float = 1.0
     prestress: float = 0.0
     plates: str = "none"
@@ -373,11 +387,99 @@ class AnchorSpec:
         if self.layout == "radial":
             return radial_anchors(self.angles, ring_thickness=arch.ring_thickness,
                                   rings=arch.rings, cover=self.cover, **geo, **kw)
+        if self.layout == "inclined":
+            return inclined_anchors(self.positions, inclination=self.inclination,
+                                    length=self.length, ring_thickness=arch.ring_thickness,
+                                    rings=arch.rings, cover=self.cover, **geo, **kw)
         depth = arch.rings * arch.ring_thickness
         if not 0.0 < self.depth < depth:
             raise ValueError(f"depth {self.depth} m is outside the arch (0..{depth:g} m)")
         return [intrados_stitch(self.start_angle, self.end_angle, depth=self.depth,
                                 pieces=self.pieces, **geo, **kw)]
+
+
+@dataclass(frozen=True)
+class AnchorLayout:
+    """One candidate of a layout search: straight anchors drilled from the intrados
+    (see :func:`~masonry_fdem.anchors.inclined_anchors`), all alike.
+
+    Attributes:
+        positions: s of the entry points (0: left springing, 1: right springing).
+        inclination: angle to the intrados tangent [deg] (90: radial).
+        length: anchor length [m] (None: through to the extrados cover).
+        prestress: lock-off force [N] per bar (0: passive anchors).
+    """
+
+    positions: tuple[float, ...]
+    inclination: float = 90.0
+    length: float | None = None
+    prestress: float = 0.0
+
+    @property
+    def key(self) -> str:
+        """A stable, readable identifier (the search journal's key)."""
+        pos = ",".join(f"{p:.4g}" for p in self.positions)
+        ell = "through" if self.length is None else f"{self.length:.4g}m"
+        return f"s=[{pos}] {self.inclination:.4g}deg {ell} P={self.prestress:.4g}N"
+
+    def spec(self, search: SearchSpec) -> AnchorSpec:
+        """The ``[[anchors]]`` entry of this layout with the search's bar and bond."""
+        return AnchorSpec("inclined", search.diameter, search.steel, search.bond,
+                          positions=self.positions, inclination=self.inclination,
+                          length=self.length, cover=search.cover, count=search.bars,
+                          prestress=self.prestress,
+                          plates="both" if self.prestress > 0 else "none", name="anchor")
+
+
+class Objective(StrEnum):
+    """What the layout search looks for."""
+
+    GAIN_PER_METRE = "gain_per_metre"
+    CHEAPEST = "cheapest"
+
+
+@dataclass(frozen=True)
+class SearchSpec:
+    """The ``[search]`` table: the candidate space of a layout search (see
+    :func:`masonry_fdem.repair.search`). Lengths [m], angles [deg], forces [N].
+
+    The candidates are every combination of ``count`` positions out of ``positions``
+    (for each of ``counts``), with each of ``inclinations``, ``lengths`` and
+    ``prestress``, plus the explicit ``layouts``.
+    """
+
+    positions: tuple[float, ...] = ()
+    counts: tuple[int, ...] = (1,)
+    inclinations: tuple[float, ...] = (90.0,)
+    lengths: tuple[float | None, ...] = (None,)
+    prestress: tuple[float, ...] = (0.0,)
+    layouts: tuple[AnchorLayout, ...] = ()
+    diameter: float = 0.016
+    bars: float = 1.0
+    cover: float = 0.02
+    min_spacing: float = 0.05
+    steel: SteelLaw = SteelLaw()
+    bond: BondLaw = BondLaw.uniform(2e6, 2e-4)
+    objective: Objective = Objective.GAIN_PER_METRE
+    target: float | None = None
+    keep: int = 4
+    keep_ratio: float = 0.5
+    coarse: bool = True
+    max_candidates: int = 500
+
+    def candidates(self) -> list[AnchorLayout]:
+        """The candidate layouts, in a fixed order (explicit ``layouts`` last)."""
+        import itertools
+
+        out = []
+        for n in self.counts:
+            for pos in itertools.combinations(self.positions, n):
+                for inc in self.inclinations:
+                    for ell in self.lengths:
+                        for p in self.prestress:
+                            out.append(AnchorLayout(tuple(pos), inc, ell, p))
+        return out + list(self.layouts)
+
 
 
 @dataclass(frozen=True, eq=False)
@@ -395,6 +497,7 @@ class ArchCase:
     analysis: AnalysisSpec
     anchor_specs: tuple[AnchorSpec, ...]
     source: Path | None = None
+    search: SearchSpec | None = None
 
     def layout(self) -> BlockLayout:
         """The arch and its abutments, without the voussoirs of "missing_brick" damage."""
@@ -436,6 +539,52 @@ class ArchCase:
     def anchors(self) -> list[Anchor]:
         """The ``[[anchors]]`` as :class:`~masonry_fdem.anchors.Anchor` objects."""
         return [a for spec in self.anchor_specs for a in spec.build(self.arch)]
+
+    def anchor_problems(self, anchors: Sequence[Anchor] | None = None,
+                        min_spacing: float | None = None) -> list[str]:
+        """What is wrong with an anchor layout in this arch (empty if nothing).
+
+        Args:
+            anchors: the anchors (default: the case's own :meth:`anchors`).
+            min_spacing: if given, two anchors closer than this [m] (crossing, touching
+                or running side by side) are a problem too.
+
+        An anchor leaves the structure when a point of it lies outside every block of
+        :meth:`layout` (through the extrados, past a springing into the air, through
+        a missing voussoir); it is tested every 1/20 of a ring thickness along the bar.
+        """
+        anchors = self.anchors() if anchors is None else list(anchors)
+        polys = list(self.layout().polygons)
+        tol = 1e-9 * self.arch.span
+        step = self.arch.ring_thickness / 20.0
+        out = []
+        for k, a in enumerate(anchors):
+            label = a.name or f"anchor {k}"
+            pts = []
+            for p, q in zip(a.points[:-1], a.points[1:], strict=True):
+                m = max(1, math.ceil(np.linalg.norm(q - p) / step))
+                pts.append(p + np.linspace(0.0, 1.0, m + 1)[:, None] * (q - p))
+            pts = np.vstack(pts)
+            bad = ~_inside_any(polys, pts, tol)
+            if bad.any():
+                x, y = pts[int(np.argmax(bad))]
+                out.append(f"{label} leaves the structure at ({x:.3f}, {y:.3f}) m: "
+                           "that point is in no block of the arch or its abutments")
+        if min_spacing is not None:
+            for i in range(len(anchors)):
+                for j in range(i + 1, len(anchors)):
+                    d = _polyline_distance(anchors[i].points, anchors[j].points)
+                    if d < min_spacing:
+                        li = anchors[i].name or f"anchor {i}"
+                        lj = anchors[j].name or f"anchor {j}"
+                        how = "cross" if d <= tol else f"are {d * 1e3:.1f} mm apart"
+                        out.append(f"{li} and {lj} overlap: they {how}, closer than the "
+                                   f"minimum spacing {min_spacing * 1e3:.0f} mm")
+        return out
+
+    def with_anchors(self, specs: Sequence[AnchorSpec]) -> ArchCase:
+        """The same case with these ``[[anchors]]`` instead of its own (none: unstrengthened)."""
+        return replace(self, anchor_specs=tuple(specs))
 
     def load_x(self) -> float:
         """Horizontal coordinate [m] of the load (the origin is at mid-span)."""
@@ -603,6 +752,50 @@ def _on_segments(p0: np.ndarray, p1: np.ndarray, tol: float) -> Callable[[np.nda
     return on
 
 
+def _inside_any(polys: Sequence[np.ndarray], pts: np.ndarray, tol: float) -> np.ndarray:
+    """Whether each point lies in (or within ``tol`` of) one of the polygons."""
+    inside = np.zeros(len(pts), dtype=bool)
+    x, y = pts[:, 0], pts[:, 1]
+    for poly in polys:
+        a, b = poly, np.roll(poly, -1, axis=0)
+        # even-odd rule
+        cross = ((a[None, :, 1] > y[:, None]) != (b[None, :, 1] > y[:, None]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = a[None, :, 0] + (y[:, None] - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) \
+                / (b[None, :, 1] - a[None, :, 1])
+        inside |= (np.count_nonzero(cross & (x[:, None] < xc), axis=1) % 2) == 1
+        # on an edge
+        d = b - a
+        t = np.clip(((pts[:, None, :] - a[None]) * d[None]).sum(-1) / (d * d).sum(-1), 0, 1)
+        near = np.linalg.norm(a[None] + t[..., None] * d[None] - pts[:, None, :], axis=-1)
+        inside |= near.min(axis=1) <= tol
+    return inside
+
+
+def _segment_distance(p: np.ndarray, q: np.ndarray, r: np.ndarray, s: np.ndarray) -> float:
+    """Distance between the segments pq and rs (0 if they cross)."""
+    def orient(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    d1, d2, d3, d4 = orient(r, s, p), orient(r, s, q), orient(p, q, r), orient(p, q, s)
+    if d1 * d2 < 0 and d3 * d4 < 0:
+        return 0.0
+
+    def to_segment(x, a, b):
+        ab = b - a
+        t = float(np.clip(np.dot(x - a, ab) / np.dot(ab, ab), 0.0, 1.0))
+        return float(np.linalg.norm(a + t * ab - x))
+
+    return min(to_segment(p, r, s), to_segment(q, r, s), to_segment(r, p, q),
+               to_segment(s, p, q))
+
+
+def _polyline_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Smallest distance between two polylines [m]."""
+    return min(_segment_distance(a[i], a[i + 1], b[j], b[j + 1])
+               for i in range(len(a) - 1) for j in range(len(b) - 1))
+
+
 # ---------------------------------------------------------------------- reading tables
 def _show(v: Any) -> str:
     return repr(v) if isinstance(v, str) else str(v)
@@ -729,6 +922,7 @@ _ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "ou
                   "refinements", "hinge_opening", "penalty_factor", "post_peak_steps",
                   "post_peak_drop", "follow_peak")
 _ANCHOR_KEYS = ("layout", "angles", "cover", "start_angle", "end_angle", "depth", "pieces",
+                "positions", "inclination", "length",
                 "diameter", "count", "prestress", "plates", "bond_diameter", "segment", "name",
                 "steel", "bond")
 _STEEL_KEYS = tuple(f.name for f in fields(SteelLaw))
@@ -967,7 +1161,7 @@ def _parse_damage(i: int, data: Any, problems: list[str], arch: ArchSpec | None,
 def _parse_anchor(i: int, data: Any, problems: list[str], arch: ArchSpec | None):
     path = f"anchors[{i}]"
     t = _Table(problems, path, data, _ANCHOR_KEYS)
-    layout = t.string("layout", choices=("radial", "stitch"))
+    layout = t.string("layout", choices=("radial", "stitch", "inclined"))
     kw: dict[str, Any] = dict(
         diameter=t.number("diameter", gt=0.0), count=t.number("count", 1.0, gt=0.0),
         prestress=t.number("prestress", 0.0, ge=0.0),
@@ -979,10 +1173,37 @@ def _parse_anchor(i: int, data: Any, problems: list[str], arch: ArchSpec | None)
     elif layout == "stitch":
         kw.update(start_angle=t.number("start_angle"), end_angle=t.number("end_angle"),
                   depth=t.number("depth", gt=0.0), pieces=t.integer("pieces", None, ge=1))
-    for key in ("angles", "cover") if layout == "stitch" else (
-            ("start_angle", "end_angle", "depth", "pieces") if layout == "radial" else ()):
-        if key in t.data:
+    elif layout == "inclined":
+        kw.update(positions=t.numbers("positions"),
+                  inclination=t.number("inclination", 90.0, gt=0.0, lt=180.0),
+                  length=t.number("length", None, gt=0.0), cover=t.number("cover", 0.02, ge=0.0))
+    used = {"radial": ("angles", "cover"), "stitch": ("start_angle", "end_angle", "depth",
+                                                      "pieces"),
+            "inclined": ("positions", "inclination", "length", "cover")}
+    for key in sorted({k for v in used.values() for k in v}):
+        if layout in used and key in t.data and key not in used[layout]:
             t.bad(key, f"not used by layout = {layout!r}")
+    steel, bond = _parse_steel_bond(t, problems, path)
+    optional = ("bond_diameter", "segment", "pieces", "length")
+    if layout is None or steel is None or bond is None or any(
+            v is None for k, v in kw.items() if k not in optional):
+        return None
+    spec = AnchorSpec(layout, steel=steel, bond=bond, **kw)
+    if arch is not None:
+        try:
+            spec.build(arch)
+        except (ValueError, TypeError) as e:
+            problems.append(f"{path}: {e}")
+            return None
+    return spec
+
+_SEARCH_KEYS = ("positions", "counts", "inclinations", "lengths", "prestress", "layouts",
+                "diameter", "bars", "cover", "min_spacing", "steel", "bond", "objective",
+                "target", "keep", "keep_ratio", "coarse", "max_candidates")
+_LAYOUT_KEYS = ("positions", "inclination", "length", "prestress")
+
+
+def _parse_steel_bond(t: _Table, problems: list[str], path: str):
     steel = bond = None
     st = t.table("steel", _STEEL_KEYS)
     svals = {k: st.number(k) for k in _STEEL_KEYS if k in st.data} if st else {}
@@ -1001,18 +1222,81 @@ def _parse_anchor(i: int, data: Any, problems: list[str], arch: ArchSpec | None)
                 bond = BondLaw(slip, stress)
             except ValueError as e:
                 problems.append(f"{path}.bond: {e}")
-    optional = ("bond_diameter", "segment", "pieces")
-    if layout is None or steel is None or bond is None or any(
-            v is None for k, v in kw.items() if k not in optional):
+    return steel, bond
+
+
+def _parse_search(t: _Table, problems: list[str], arch: ArchSpec | None) -> SearchSpec | None:
+    n0 = len(problems)
+
+    def s_list(key):
+        v = t.numbers(key, None)
+        if v is not None and not all(-_S_TOL <= x <= 1 + _S_TOL for x in v):
+            t.bad(key, f"every position must be in [0, 1] (s along the arch), got {list(v)}")
+        return v
+
+    positions = s_list("positions") or ()
+    counts = t.raw("counts", [1])
+    if not (isinstance(counts, list) and counts and all(
+            isinstance(c, int) and not isinstance(c, bool) and c >= 1 for c in counts)):
+        t.bad("counts", f"must be a non-empty list of integers >= 1, got {_show(counts)}")
+        counts = [1]
+    incl = t.numbers("inclinations", (90.0,)) or (90.0,)
+    if not all(0.0 < a < 180.0 for a in incl):
+        t.bad("inclinations", f"every angle must be in (0, 180) degrees, got {list(incl)}")
+    lengths_raw = t.raw("lengths", ["through"])
+    lengths: list[float | None] = []
+    if not isinstance(lengths_raw, list) or not lengths_raw:
+        t.bad("lengths", f"must be a non-empty list of lengths [m] or \"through\", got "
+                         f"{_show(lengths_raw)}")
+    else:
+        for v in lengths_raw:
+            if v == "through":
+                lengths.append(None)
+            elif isinstance(v, int | float) and not isinstance(v, bool) and v > 0 and \
+                    math.isfinite(v):
+                lengths.append(float(v))
+            else:
+                t.bad("lengths", f"every entry must be a length > 0 [m] or \"through\", "
+                                 f"got {_show(v)}")
+    prestress = t.numbers("prestress", (0.0,)) or (0.0,)
+    if any(p < 0 for p in prestress):
+        t.bad("prestress", f"forces must be >= 0 [N], got {list(prestress)}")
+    layouts = []
+    for i, d in enumerate(t.tables("layouts")):
+        lt = _Table(problems, f"search.layouts[{i}]", d, _LAYOUT_KEYS)
+        pos = lt.numbers("positions")
+        inc = lt.number("inclination", 90.0, gt=0.0, lt=180.0)
+        ell = lt.number("length", None, gt=0.0)
+        pre = lt.number("prestress", 0.0, ge=0.0)
+        if pos is not None and inc is not None and pre is not None:
+            layouts.append(AnchorLayout(tuple(pos), inc, ell, pre))
+    objective = t.string("objective", "gain_per_metre", [o.value for o in Objective])
+    target = t.number("target", None, gt=0.0)
+    if objective == "cheapest" and target is None and "target" not in t.data:
+        t.bad("target", "required by objective = \"cheapest\" (the load to reach [N])")
+    if not positions and not layouts:
+        problems.append("search: give positions (and counts, ...) or [[search.layouts]]")
+    steel, bond = _parse_steel_bond(t, problems, "search")
+    kw = dict(diameter=t.number("diameter", 0.016, gt=0.0), bars=t.number("bars", 1.0, gt=0.0),
+              cover=t.number("cover", 0.02, ge=0.0),
+              min_spacing=t.number("min_spacing", 0.05, ge=0.0),
+              keep=t.integer("keep", 4, ge=1), keep_ratio=t.number("keep_ratio", 0.5, ge=0.0,
+                                                                   le=1.0),
+              coarse=t.boolean("coarse", True),
+              max_candidates=t.integer("max_candidates", 500, ge=1))
+    if len(problems) > n0 or None in kw.values() or None in (steel, bond, objective):
         return None
-    spec = AnchorSpec(layout, steel=steel, bond=bond, **kw)
-    if arch is not None:
-        try:
-            spec.build(arch)
-        except (ValueError, TypeError) as e:
-            problems.append(f"{path}: {e}")
-            return None
+    spec = SearchSpec(positions=tuple(positions), counts=tuple(counts),
+                      inclinations=tuple(incl), lengths=tuple(lengths),
+                      prestress=tuple(prestress), layouts=tuple(layouts), steel=steel,
+                      bond=bond, objective=Objective(objective), target=target, **kw)
+    n = len(spec.candidates())
+    if n > spec.max_candidates:
+        problems.append(f"search: {n} candidate layouts, more than max_candidates = "
+                        f"{spec.max_candidates}; narrow the space or raise the limit")
+        return None
     return spec
+
 
 
 def _load_toml(path: Path) -> dict[str, Any]:
@@ -1054,7 +1338,7 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         name = name or path.stem
     problems: list[str] = []
     root = _Table(problems, "", data, ("arch", "materials", "joints", "loading", "damage",
-                                       "analysis", "anchors"))
+                                       "analysis", "anchors", "search"))
     at = root.table("arch", _ARCH_KEYS, required=True)
     arch = _parse_arch(at) if at is not None else None
     mats = _parse_materials(root)
@@ -1080,6 +1364,8 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
     damage = [_parse_damage(i, d, problems, arch, rings)
               for i, d in enumerate(root.tables("damage"))]
     anchors = [_parse_anchor(i, a, problems, arch) for i, a in enumerate(root.tables("anchors"))]
+    st = root.table("search", _SEARCH_KEYS)
+    search = _parse_search(st, problems, arch) if st is not None else None
     an = root.table("analysis", _ANALYSIS_KEYS) or _Table(problems, "analysis", {}, ())
     analysis = AnalysisSpec(
         an.boolean("limit_analysis", True),
@@ -1099,8 +1385,12 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         problems.append("the case is incomplete")  # a check above forgot to say why
     if problems:
         raise CaseError(problems, label)
-    return ArchCase(name, arch, MappingProxyType(dict(mats)), mortar, ring, ring_type, loading,
-                    tuple(damage), analysis, tuple(anchors), path)
+    case = ArchCase(name, arch, MappingProxyType(dict(mats)), mortar, ring, ring_type, loading,
+                    tuple(damage), analysis, tuple(anchors), path, search)
+    problems = [f"anchors: {p}" for p in case.anchor_problems()]
+    if problems:
+        raise CaseError(problems, label)
+    return case
 
 
 def prepare_run_folder(case: ArchCase, overwrite: bool = False, comm: Any | None = None) -> Path:

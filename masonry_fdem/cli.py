@@ -9,6 +9,9 @@ Subcommands:
 * ``masonry-fdem assess CASE.toml`` — load a masonry arch to collapse (see
   :mod:`masonry_fdem.assess`); the run folder gets a report; ``masonry-fdem example``
   prints the reference case file;
+* ``masonry-fdem repair CASE.toml`` — the same arch unstrengthened and with the case's
+  ``[[anchors]]``, side by side in one report, and/or a search for an efficient anchor
+  layout over the case's ``[search]`` table (see :mod:`masonry_fdem.repair`);
 * ``masonry-fdem precompile`` — compile the numba kernels before an MPI run.
 """
 
@@ -113,6 +116,71 @@ def cmd_assess(args) -> int:
     return 0
 
 
+def cmd_repair(args) -> int:
+    from mpi4py import MPI
+
+    from masonry_fdem.case import CaseError, load_case
+    from masonry_fdem.repair import SearchInterrupted, compare, search
+
+    comm = MPI.COMM_WORLD
+    case = load_case(args.case)  # every problem of the file, before anything is written
+    if not case.anchor_specs and case.search is None:
+        raise CaseError("the case has neither [[anchors]] (a repair to compare with the "
+                        "unstrengthened arch) nor [search] (a layout search)",
+                        str(args.case))
+    out = Path(args.out) if args.out is not None else case.analysis.output
+    progress = False if args.quiet else None
+    try:
+        if case.anchor_specs:
+            done = (out / "comparison" / "report.md").is_file()
+            if args.resume and done:
+                if comm.rank == 0:
+                    print(f"comparison already done: {(out / 'comparison').resolve()}")
+            else:
+                res = compare(case, out=out / "comparison", overwrite=args.overwrite,
+                              progress=progress, comm=comm)
+                if comm.rank == 0:
+                    u, a = res.unstrengthened, res.anchored
+                    print(f"{case.name}: unstrengthened {u.collapse_load / 1e3:.2f} kN, "
+                          f"anchored {a.collapse_load / 1e3:.2f} kN"
+                          f"{'' if a.collapsed else ' (run limit reached, no collapse)'}"
+                          f" ({100 * res.gain:+.0f} %, {res.anchor_length:.2f} m of anchor)")
+                    print(f"report: {res.report.resolve()}")
+        if case.search is not None:
+            def tick(info):
+                if comm.rank == 0 and not args.quiet:
+                    print(f"  {info['level']}: {info['done']}/{info['total']} layouts run",
+                          file=sys.stderr)
+
+            sr = search(case, out=out / "search", resume=args.resume,
+                        overwrite=args.overwrite, group_size=args.group_size, comm=comm,
+                        callback=tick)
+            if comm.rank == 0:
+                for key, why in sr.rejected:
+                    print(f"rejected {key}: {why}", file=sys.stderr)
+                print(f"search: unstrengthened {sr.baseline / 1e3:.2f} kN; "
+                      f"{len(sr.ranking)} layouts ranked, {len(sr.rejected)} rejected, "
+                      f"{len(sr.pruned)} dropped as hopeless")
+                if sr.best:
+                    print(f"best: {sr.best.key}: {sr.best.collapse_load / 1e3:.2f} kN, "
+                          f"{sr.best.length:.2f} m of anchor, "
+                          f"{sr.best.gain_per_metre / 1e3:.2f} kN per metre")
+                if sr.target is not None:
+                    ch = sr.cheapest
+                    print(f"cheapest reaching {sr.target / 1e3:.2f} kN: "
+                          + (f"{ch.key} ({ch.length:.2f} m)" if ch else "none"))
+                print(f"report: {sr.report.resolve()}")
+    except SearchInterrupted as exc:
+        if comm.rank == 0:
+            print(f"masonry-fdem: {exc}", file=sys.stderr)
+        return 3
+    except RuntimeError as exc:
+        if comm.rank == 0:
+            print(f"masonry-fdem: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def cmd_example(args) -> int:
     from masonry_fdem.case import EXAMPLE_CASE
 
@@ -162,6 +230,19 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--overwrite", action="store_true", help="reuse a non-empty run folder")
     q.add_argument("--quiet", action="store_true", help="no progress bar")
     q.set_defaults(func=cmd_assess)
+    q = sub.add_parser("repair", help="unstrengthened against anchored, and/or an anchor "
+                       "layout search ([search]); reports in a run folder")
+    q.add_argument("case", type=Path, help="case file (TOML) with [[anchors]] and/or [search]")
+    q.add_argument("--out", type=Path, default=None,
+                   help="run folder (default: analysis.output of the case); it gets "
+                        "comparison/ and search/")
+    q.add_argument("--overwrite", action="store_true", help="start afresh in a used folder")
+    q.add_argument("--resume", action="store_true",
+                   help="go on with an interrupted search (its journal) in the folder")
+    q.add_argument("--group-size", type=int, default=1,
+                   help="MPI ranks per layout run of the search (default 1)")
+    q.add_argument("--quiet", action="store_true", help="no progress output")
+    q.set_defaults(func=cmd_repair)
     q = sub.add_parser("example", help="print the reference case file")
     q.set_defaults(func=cmd_example)
     q = sub.add_parser("precompile", help="compile the numba kernels")
