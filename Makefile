@@ -11,7 +11,7 @@ MPIRUN := $(VENV)/bin/mpirun
 EXTRAS ?= test,wheel
 VENV_FLAGS ?=
 
-.PHONY: demo test test-serial test-parallel precompile bench clean venv
+.PHONY: demo demo-search test test-serial test-parallel precompile bench clean venv
 
 PYTHON ?= $(shell bash tools/find_python.sh)
 
@@ -29,12 +29,16 @@ precompile: venv
 	$(PY) -m masonry_fdem.precompile
 
 demo: precompile
-	$(MPIRUN) -n $(NP) $(PY) demos/assess_arch.py --out out_assess_arch
+	$(MPIRUN) -n $(NP) $(PY) demos/repair_arch.py --out out_repair_arch
 	$(MPIRUN) -n $(NP) $(PY) demos/settle_arch.py --out out_settle_arch
 	$(MPIRUN) -n $(NP) $(PY) demos/topple_wall.py --out out_topple_wall
 	$(MPIRUN) -n $(NP) $(PY) demos/shear_wall.py --out out_shear_wall
 	$(MPIRUN) -n $(NP) $(PY) demos/materials.py --out out_materials
 	$(MPIRUN) -n $(NP) $(PY) demos/silo.py --out out_silo
+
+# a small anchor layout search (about 6 min on 2 cores)
+demo-search: precompile
+	$(MPIRUN) -n $(NP) $(PY) demos/anchor_search.py --out out_anchor_search
 
 test: test-serial test-parallel
 

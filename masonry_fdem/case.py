@@ -87,9 +87,25 @@ Schema (``*``: required):
     ``yield_stress`` [Pa], ``hardening`` [Pa], ``rupture_strain``, ``density``
     (:class:`~masonry_fdem.anchors.SteelLaw`); ``[anchors.bond]`` ``slip`` [m] and
     ``stress`` [Pa] lists (:class:`~masonry_fdem.anchors.BondLaw`). Circular arches only.
+    ``layout = "inclined"``: straight anchors drilled from the intrados (``positions``\*:
+    s of the entry points; ``inclination`` [deg] to the intrados tangent, 90 = radial,
+    below 90 leaning towards the right springing; ``length`` [m], default through to
+    ``cover`` below the extrados). An anchor that leaves the structure is refused.
+``[search]``
+    The candidate space of an anchor layout search (:class:`SearchSpec`,
+    :func:`masonry_fdem.repair.search`): ``positions`` (s), ``counts`` (anchors per
+    layout, [1]), ``inclinations`` [deg] ([90]), ``lengths`` [m] or "through"
+    (["through"]), ``prestress`` [N] ([0]); every combination, plus explicit
+    ``[[search.layouts]]`` (``positions``\*, ``inclination``, ``length``, ``prestress``).
+    The bars: ``diameter`` [m] (0.016), ``bars`` across the width (1), ``cover`` [m]
+    (0.02), ``[search.steel]``, ``[search.bond]``; ``min_spacing`` [m] between anchors
+    (0.05). ``objective`` "gain_per_metre" (default) or "cheapest" (needs ``target``
+    [N]); ``keep`` (4) and ``keep_ratio`` (0.5): what survives the coarse level;
+    ``coarse`` (true); ``max_candidates`` (500).
 
 :data:`EXAMPLE_CASE` is the reference case, a three-ring brick arch with sand between the
-rings loaded at quarter span (the TRL test of Owen et al.).
+rings loaded at quarter span (the TRL test of Owen et al.); :data:`REPAIR_EXAMPLE` is the
+same under displacement control with anchors.
 """
 
 from __future__ import annotations
@@ -124,6 +140,7 @@ from masonry_fdem.materials.elastic import Material
 
 __all__ = [
     "EXAMPLE_CASE",
+    "REPAIR_EXAMPLE",
     "TONNE_FORCE",
     "AnalysisSpec",
     "AnchorLayout",
@@ -232,6 +249,54 @@ post_peak_steps = 2
 # slip = [2e-4, 2e-3]          # [m]
 # stress = [2e6, 1e6]          # [Pa]
 """
+
+def _repair_example() -> str:
+    text = EXAMPLE_CASE.replace(
+        'control = "load"               # load | displacement (then displacement_increment [m])\n'
+        '# displacement_increment = 3e-5  # [m]; under load control: the steps after a stall',
+        'control = "displacement"       # the platen driven down: load control stalls early on\n'
+        '                               # ring-separated arches (see the README)\n'
+        'displacement_increment = 1e-4  # [m]\n'
+        'max_displacement = 1.5e-3      # [m]')
+    text = text.replace("post_peak_steps = 2", "post_peak_steps = 1")
+    text = text.replace("limit_analysis = true", "limit_analysis = false")
+    text = text.split("# Damage, any number of entries:")[0]
+    head = ("# Repair example (`masonry-fdem example --repair`): the reference case below,\n"
+            "# driven under displacement control, unstrengthened and with the anchors at the\n"
+            "# end (`masonry-fdem repair`).\n")
+    return head + text + \
+        """# The repair: nine straight anchors drilled from the intrados at 30 deg to it, through
+# the three rings (tying them across the sand layers and across the radial joints), and
+# two curved stitches along the barrel, one in the inner ring and one in the outer ring.
+[[anchors]]
+layout = "inclined"
+positions = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85]  # s of the entry points
+inclination = 30.0             # [deg] to the intrados tangent (90: radial)
+diameter = 0.016               # [m]
+name = "inclined"
+# steel and bond: the defaults ([anchors.steel], [anchors.bond] tables to change them)
+
+[[anchors]]
+layout = "stitch"
+start_angle = 10.0             # [deg] about the intrados centre, 90 = crown
+end_angle = 170.0
+depth = 0.05                   # [m] above the intrados
+diameter = 0.016
+name = "intrados stitch"
+
+[[anchors]]
+layout = "stitch"
+start_angle = 10.0
+end_angle = 170.0
+depth = 0.28
+diameter = 0.016
+name = "extrados stitch"
+
+# A layout search ([search], see the README) would go here; `masonry-fdem repair` runs
+# the comparison above and the search if both are given.
+"""
+
+
 
 _REQUIRED = object()
 _S_TOL = 1e-9
@@ -466,6 +531,14 @@ class SearchSpec:
     keep_ratio: float = 0.5
     coarse: bool = True
     max_candidates: int = 500
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "objective", Objective(self.objective))
+        if self.objective is Objective.CHEAPEST and self.target is None:
+            raise ValueError('objective "cheapest" needs a target load [N]')
+        if self.keep < 1 or not 0.0 <= self.keep_ratio <= 1.0:
+            raise ValueError(f"keep must be >= 1 and keep_ratio in [0, 1], got "
+                             f"{self.keep}, {self.keep_ratio}")
 
     def candidates(self) -> list[AnchorLayout]:
         """The candidate layouts, in a fixed order (explicit ``layouts`` last)."""
@@ -1428,3 +1501,6 @@ def prepare_run_folder(case: ArchCase, overwrite: bool = False, comm: Any | None
     if error:
         raise CaseError(error, str(case.source) if case.source else None)
     return out
+
+
+REPAIR_EXAMPLE = _repair_example()

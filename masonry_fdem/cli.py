@@ -182,9 +182,9 @@ def cmd_repair(args) -> int:
 
 
 def cmd_example(args) -> int:
-    from masonry_fdem.case import EXAMPLE_CASE
+    from masonry_fdem.case import EXAMPLE_CASE, REPAIR_EXAMPLE
 
-    sys.stdout.write(EXAMPLE_CASE)
+    sys.stdout.write(REPAIR_EXAMPLE if args.repair else EXAMPLE_CASE)
     return 0
 
 
@@ -244,6 +244,8 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--quiet", action="store_true", help="no progress output")
     q.set_defaults(func=cmd_repair)
     q = sub.add_parser("example", help="print the reference case file")
+    q.add_argument("--repair", action="store_true",
+                   help="the reference case with anchors, for `masonry-fdem repair`")
     q.set_defaults(func=cmd_example)
     q = sub.add_parser("precompile", help="compile the numba kernels")
     q.set_defaults(func=cmd_precompile)
