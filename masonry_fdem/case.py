@@ -87,7 +87,7 @@ Schema (``*``: required):
     ``yield_stress`` [Pa], ``hardening`` [Pa], ``rupture_strain``, ``density``
     (:class:`~masonry_fdem.anchors.SteelLaw`); ``[anchors.bond]`` ``slip`` [m] and
     ``stress`` [Pa] lists (:class:`~masonry_fdem.anchors.BondLaw`). Circular arches only.
-    ``layout = "inclined"``: straight anchors drilled from the intrados (``positions``\*:
+    ``layout = "inclined"``: straight anchors drilled from the intrados (``positions``\\*:
     s of the entry points; ``inclination`` [deg] to the intrados tangent, 90 = radial,
     below 90 leaning towards the right springing; ``length`` [m], default through to
     ``cover`` below the extrados). An anchor that leaves the structure is refused.
@@ -96,7 +96,7 @@ Schema (``*``: required):
     :func:`masonry_fdem.repair.search`): ``positions`` (s), ``counts`` (anchors per
     layout, [1]), ``inclinations`` [deg] ([90]), ``lengths`` [m] or "through"
     (["through"]), ``prestress`` [N] ([0]); every combination, plus explicit
-    ``[[search.layouts]]`` (``positions``\*, ``inclination``, ``length``, ``prestress``).
+    ``[[search.layouts]]`` (``positions``\\*, ``inclination``, ``length``, ``prestress``).
     The bars: ``diameter`` [m] (0.016), ``bars`` across the width (1), ``cover`` [m]
     (0.02), ``[search.steel]``, ``[search.bond]``; ``min_spacing`` [m] between anchors
     (0.05). ``objective`` "gain_per_metre" (default) or "cheapest" (needs ``target``
