@@ -42,7 +42,7 @@ import math
 import shutil
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -334,7 +334,7 @@ def assess(
         anchors.lock_off()
         it0 = res.iterations
         res = dr.solve(0.0)
-        res.iterations += it0
+        res = replace(res, iterations=res.iterations + it0)
     if not res.converged:
         raise RuntimeError(f"{case.name}: no equilibrium under self-weight "
                            f"({res.iterations} iterations); the arch cannot stand")

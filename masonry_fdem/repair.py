@@ -153,7 +153,8 @@ def compare(
         if comm.rank == 0:
             shutil.rmtree(tmp, ignore_errors=True)
         comm.barrier()
-    bare = case.with_anchors(())
+    bare = replace(case.with_anchors(()), name=f"{case.name} (unstrengthened)")
+    anchored = replace(case, name=f"{case.name} (anchored)")
     kw = dict(progress=progress, write=write, overwrite=True)
     try:
         if side_by_side and comm.size >= 2:
@@ -161,8 +162,10 @@ def compare(
             half = comm.size // 2
             color = 0 if comm.rank < half else 1
             sub = comm.Split(color, comm.rank)
+            if color == 1:  # one progress bar on the terminal, the first pair's
+                kw["progress"] = False
             try:
-                mine = assess((bare, case)[color], out=tmp / _SUBFOLDERS[color], comm=sub,
+                mine = assess((bare, anchored)[color], out=tmp / _SUBFOLDERS[color], comm=sub,
                               **kw)
             finally:
                 sub.Free()
@@ -170,7 +173,7 @@ def compare(
             r1 = comm.bcast(mine if comm.rank == half else None, root=half)
         else:
             r0 = assess(bare, out=tmp / "unstrengthened", comm=comm, **kw)
-            r1 = assess(case, out=tmp / "anchored", comm=comm, **kw)
+            r1 = assess(anchored, out=tmp / "anchored", comm=comm, **kw)
         result = Comparison(case.name, r0, r1, r1.anchor_length)
         if write:
             error = None

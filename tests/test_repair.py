@@ -16,6 +16,7 @@ from mpi4py import MPI
 
 import pytest
 
+from masonry_fdem.assess import assess
 from masonry_fdem.case import AnchorLayout, CaseError, SearchSpec, load_case
 from masonry_fdem.cli import main as cli_main
 from masonry_fdem.repair import SearchInterrupted, compare, search
@@ -228,7 +229,9 @@ def test_cheapest_layout_reaching_a_target_stops_early(tmp_path_factory):
     root = _shared_tmp(tmp_path_factory, "cheapest")
     space = SearchSpec(positions=(0.36, 0.7), counts=(1, 2), inclinations=(20.0,),
                        objective="cheapest", target=5300.0, coarse=False)
-    res = search(load_case(DRY, name="dry"), space, out=root / "run")
+    # all ranks in one group (under mpirun: one layout at a time on two ranks)
+    res = search(load_case(DRY, name="dry"), space, out=root / "run",
+                 group_size=MPI.COMM_WORLD.size)
     print(f"\ncheapest: {res.cheapest.key if res.cheapest else None}; ranking "
           f"{[(r.key, round(r.collapse_load), r.reaches_target) for r in res.ranking]}; "
           f"pruned {res.pruned}")
@@ -238,3 +241,29 @@ def test_cheapest_layout_reaching_a_target_stops_early(tmp_path_factory):
     assert res.cheapest.collapse_load < 6000.0  # stopped at the target, not at its peak
     assert two in dict(res.pruned) and "no shorter than" in dict(res.pruned)[two]
     assert two not in {r.key for r in res.ranking}
+
+
+def test_prestressed_anchor_is_locked_off_before_the_load():
+    """An inclined anchor with plates at both ends, jacked to 15 kN under self-weight,
+    locked off and grouted, then 1 kN of live load: the bar still holds about 15 kN."""
+    data = copy.deepcopy(DRY)
+    data["loading"] = {"position": 0.25, "increment": 1000.0, "max_load": 1000.0}
+    data["anchors"] = [{"layout": "inclined", "positions": [0.36], "inclination": 20.0,
+                        "diameter": 0.016, "prestress": 15000.0, "plates": "both"}]
+    res = assess(load_case(data, name="prestressed"), write=False, progress=False)
+    f = res.anchors[0]["force"]
+    print(f"\nprestressed anchor: bar forces {min(f):.0f}..{max(f):.0f} N at "
+          f"{res.collapse_load:.0f} N of live load")
+    assert not res.collapsed and res.collapse_load == pytest.approx(1000.0)
+    assert min(f) == pytest.approx(15000.0, rel=0.05)
+    assert max(f) == pytest.approx(15000.0, rel=0.05)
+
+
+def test_repair_example_is_a_valid_case():
+    import tomllib
+
+    from masonry_fdem.case import REPAIR_EXAMPLE
+
+    case = load_case(tomllib.loads(REPAIR_EXAMPLE), name="repair")
+    assert case.loading.control.value == "displacement"
+    assert len(case.anchors()) == 11 and not case.anchor_problems()
