@@ -160,7 +160,8 @@ def cmd_repair(args) -> int:
                     print(f"rejected {key}: {why}", file=sys.stderr)
                 print(f"search: unstrengthened {sr.baseline / 1e3:.2f} kN; "
                       f"{len(sr.ranking)} layouts ranked, {len(sr.rejected)} rejected, "
-                      f"{len(sr.pruned)} dropped as hopeless")
+                      f"{len(sr.pruned)} dropped as hopeless; {sr.evaluations} runs, "
+                      f"{sr.reused} from the journal")
                 if sr.best:
                     print(f"best: {sr.best.key}: {sr.best.collapse_load / 1e3:.2f} kN, "
                           f"{sr.best.length:.2f} m of anchor, "
