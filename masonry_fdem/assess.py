@@ -547,10 +547,7 @@ def _write(case, res: Assessment, folder: Path, overwrite, model, inter, anchors
         if comm.rank == 0:  # the other ranks must not wait for a rank that failed
             try:
                 _write_rank0(case, res, tmp, mag)
-                folder.mkdir(parents=True, exist_ok=True)
-                for f in sorted(tmp.iterdir()):
-                    f.replace(folder / f.name)
-                tmp.rmdir()
+                move_into(tmp, folder)
             except Exception as exc:
                 error = f"writing the run folder {folder}: {exc!r}"
         error = comm.bcast(error, root=0)
@@ -563,6 +560,18 @@ def _write(case, res: Assessment, folder: Path, overwrite, model, inter, anchors
     res.folder = folder
     res.report = folder / "report.md"
     comm.barrier()
+
+
+def move_into(tmp: Path, folder: Path) -> None:
+    """Move every entry of the finished folder ``tmp`` into ``folder`` (created if need
+    be; an entry of the same name is replaced) and remove ``tmp``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for f in sorted(tmp.iterdir()):
+        dest = folder / f.name
+        if dest.is_dir() and not dest.is_symlink():
+            shutil.rmtree(dest)
+        f.replace(dest)
+    tmp.rmdir()
 
 
 def _write_rank0(case, res: Assessment, tmp: Path, mag: float) -> None:

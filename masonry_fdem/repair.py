@@ -55,7 +55,7 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.assess import Assessment, assess
+from masonry_fdem.assess import Assessment, assess, move_into
 from masonry_fdem.case import (
     AnchorLayout,
     ArchCase,
@@ -180,13 +180,7 @@ def compare(
             if comm.rank == 0:
                 try:
                     _write_comparison(case, result, tmp)
-                    folder.mkdir(parents=True, exist_ok=True)
-                    for f in sorted(tmp.iterdir()):
-                        dest = folder / f.name
-                        if dest.is_dir():
-                            shutil.rmtree(dest)
-                        f.replace(dest)
-                    tmp.rmdir()
+                    move_into(tmp, folder)
                 except Exception as exc:
                     error = f"writing the run folder {folder}: {exc!r}"
             error = comm.bcast(error, root=0)
