@@ -36,9 +36,9 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import BlockContact, ContactSettings
+from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.geometry import BlockLayout, arch_layout, rectangle
-from masonry_fdem.limit_analysis import limit_analysis
+from masonry_fdem.solvers.limit_analysis import limit_analysis
 from masonry_fdem.solvers import DynamicRelaxation
 
 def build(case: str, t: float, h: float, E_arch: float = 10e9):

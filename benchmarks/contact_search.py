@@ -20,8 +20,8 @@ import numpy as np
 from numba import njit
 from scipy.spatial import cKDTree
 
-from masonry_fdem.contact import _adt_kernels
-from masonry_fdem.contact.adt import brute_force_pairs, self_pairs
+from masonry_fdem.interactions.search import _kernels as _adt_kernels
+from masonry_fdem.interactions.search.adt import brute_force_pairs, self_pairs
 
 
 def segments(n: int, variation: float, seed: int = 0) -> np.ndarray:

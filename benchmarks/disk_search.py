@@ -4,7 +4,7 @@ facets' machinery) and scipy's cKDTree, on dense polydisperse packings of 1e4 to
 Each method returns the pairs closer than r_i + r_j + margin (the ADT's box pairs are
 filtered by that distance; all three must agree). Prints the median time per disk of
 a full search (build + query) and the ratios to the cell list, which decided the choice
-in ``masonry_fdem.disks`` (cell list for disk–disk; the ADT stays for disk–facet pairs,
+in ``masonry_fdem.interactions.disks`` (cell list for disk–disk; the ADT stays for disk–facet pairs,
 whose sizes differ widely).
 Run: ``python benchmarks/disk_search.py [--sizes 1e4 1e5 1e6]``.
 """
@@ -17,8 +17,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import masonry_fdem  # noqa: F401
-from masonry_fdem.contact._disk_kernels import disk_pairs_cell_list
-from masonry_fdem.contact.adt import self_pairs
+from masonry_fdem.interactions.disks._kernels import disk_pairs_cell_list
+from masonry_fdem.interactions.search.adt import self_pairs
 
 
 def dense(n: int, seed: int = 0):

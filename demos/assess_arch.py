@@ -1,6 +1,6 @@
 """The main job: remnant strength of a three-ring brick arch with a ring-separation layer.
 
-The reference case of ``masonry-fdem example`` (:data:`masonry_fdem.case.EXAMPLE_CASE`):
+The reference case of ``masonry-fdem example`` (:data:`masonry_fdem.assessment.case.EXAMPLE_CASE`):
 a 3 m semicircular arch of three 0.11 m brick rings with wet sand between the rings,
 lime-mortar joints, on abutments; loaded at quarter span through a 0.1 m spreader in
 1 tonne increments until equilibrium is lost, then driven on under displacement control
@@ -21,8 +21,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from masonry_fdem.assess import assess
-from masonry_fdem.case import EXAMPLE_CASE, load_case
+from masonry_fdem.assessment.assess import assess
+from masonry_fdem.assessment.case import EXAMPLE_CASE, load_case
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
 ap.add_argument("--out", default="out_assess_arch")

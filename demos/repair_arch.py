@@ -1,6 +1,6 @@
 """The full story: a ring-separated three-ring arch, unstrengthened against anchored.
 
-The case of ``masonry-fdem example --repair`` (:data:`masonry_fdem.case.REPAIR_EXAMPLE`):
+The case of ``masonry-fdem example --repair`` (:data:`masonry_fdem.assessment.case.REPAIR_EXAMPLE`):
 the reference arch of ``masonry-fdem example`` (3 m span, three 0.11 m brick rings with
 wet sand between them, lime-mortar joints, load at quarter span through a 0.1 m spreader)
 driven down under displacement control to past its peak, once as it is and once repaired
@@ -23,8 +23,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from masonry_fdem.case import REPAIR_EXAMPLE, load_case
-from masonry_fdem.repair import compare
+from masonry_fdem.assessment.case import REPAIR_EXAMPLE, load_case
+from masonry_fdem.assessment.repair import compare
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
 ap.add_argument("--out", default="out_repair_arch")

@@ -25,10 +25,10 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import DiskBlockContact
-from masonry_fdem.disks import DiskMaterial, Disks
+from masonry_fdem.interactions import DiskBlockContact
+from masonry_fdem.interactions.disks import DiskMaterial, Disks
 from masonry_fdem.geometry import mesh_blocks
-from masonry_fdem.packing import pack_disks
+from masonry_fdem.interactions.disks.packing import pack_disks
 from masonry_fdem.solvers import ExplicitSolver
 
 W = 0.05  # out-of-plane thickness [m]

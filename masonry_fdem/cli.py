@@ -7,11 +7,11 @@ Subcommands:
   the blocks to equilibrium under self-weight by dynamic relaxation and write the
   history CSV, ParaView files and a picture to ``--out``;
 * ``masonry-fdem assess CASE.toml`` — load a masonry arch to collapse (see
-  :mod:`masonry_fdem.assess`); the run folder gets a report; ``masonry-fdem example``
+  :mod:`masonry_fdem.assessment.assess`); the run folder gets a report; ``masonry-fdem example``
   prints the reference case file;
 * ``masonry-fdem repair CASE.toml`` — the same arch unstrengthened and with the case's
   ``[[anchors]]``, side by side in one report, and/or a search for an efficient anchor
-  layout over the case's ``[search]`` table (see :mod:`masonry_fdem.repair`);
+  layout over the case's ``[search]`` table (see :mod:`masonry_fdem.assessment.repair`);
 * ``masonry-fdem precompile`` — compile the numba kernels before an MPI run.
 """
 
@@ -93,8 +93,8 @@ def cmd_settle(args) -> int:
 def cmd_assess(args) -> int:
     from mpi4py import MPI
 
-    from masonry_fdem.assess import assess
-    from masonry_fdem.case import load_case
+    from masonry_fdem.assessment.assess import assess
+    from masonry_fdem.assessment.case import load_case
 
     comm = MPI.COMM_WORLD
     case = load_case(args.case)  # every problem of the file, before anything is written
@@ -119,8 +119,8 @@ def cmd_assess(args) -> int:
 def cmd_repair(args) -> int:
     from mpi4py import MPI
 
-    from masonry_fdem.case import CaseError, load_case
-    from masonry_fdem.repair import SearchInterrupted, compare, search
+    from masonry_fdem.assessment.case import CaseError, load_case
+    from masonry_fdem.assessment.repair import SearchInterrupted, compare, search
 
     comm = MPI.COMM_WORLD
     case = load_case(args.case)  # every problem of the file, before anything is written
@@ -183,7 +183,7 @@ def cmd_repair(args) -> int:
 
 
 def cmd_example(args) -> int:
-    from masonry_fdem.case import EXAMPLE_CASE, REPAIR_EXAMPLE
+    from masonry_fdem.assessment.case import EXAMPLE_CASE, REPAIR_EXAMPLE
 
     sys.stdout.write(REPAIR_EXAMPLE if args.repair else EXAMPLE_CASE)
     return 0

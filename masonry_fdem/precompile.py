@@ -14,6 +14,7 @@ __all__ = ["precompile"]
 
 def precompile() -> None:
     """Call each kernel once on tiny arrays of the production dtypes."""
+    from masonry_fdem.model import _kernels as MK
     from masonry_fdem.solvers import _kernels as K
 
     n = 6
@@ -22,8 +23,8 @@ def precompile() -> None:
     f = np.zeros(n)
     m = np.ones(n)
     mask = np.zeros(n, dtype=np.int8)
-    K.gather(u, np.zeros(n, dtype=np.int64), v)
-    K.gather_to(u, np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), v)
+
+    MK.gather_to(u, np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), v)
     from masonry_fdem.materials.quadrature import p1_gradients, scatter_rows
 
     p1_gradients(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), np.zeros(6),
@@ -38,9 +39,9 @@ def precompile() -> None:
     xy = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
     cells = np.array([[0, 1, 2]], dtype=np.int64)
     one = np.ones(1)
-    K.p1_element_bounds(xy, cells, one, one, one, 1.0, np.zeros(1), np.zeros(n))
+    MK.p1_element_bounds(xy, cells, one, one, one, 1.0, np.zeros(1), np.zeros(n))
 
-    from masonry_fdem.contact import _kernels as C
+    from masonry_fdem.interactions.contact import _kernels as C
 
     X = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     uu = np.zeros(8)
@@ -52,10 +53,12 @@ def precompile() -> None:
     work = np.zeros(C.N_WORK)
     C.facet_facet_forces(X, uu, uu, facets, fprev, fnext, pairs, p1, p1, p1, p1, p1, 1.0, 1e-3,
                          np.zeros((1, 2)), np.zeros((1, 2)), np.zeros(8), np.zeros(3), work)
-    C.facet_boxes(X, uu, facets, 0.1, np.zeros((4, 4)))
-    C.max_speed(uu)
+    from masonry_fdem.interactions.search import facet_boxes, max_speed
 
-    from masonry_fdem.contact import _joint_kernels as J
+    facet_boxes(X, uu, facets, 0.1, np.zeros((4, 4)))
+    max_speed(uu)
+
+    from masonry_fdem.interactions.joints import _kernels as J
 
     props = np.zeros((1, J.N_PROPS))
     props[0, [J.P_FT, J.P_GF1, J.P_C, J.P_GF2, J.P_FC, J.P_KP, J.P_GFC]] = 1.0
@@ -88,8 +91,8 @@ def precompile() -> None:
                            np.zeros(2), qps, law.kernel_params(hyp), 1e-3)
     PK.yield_value(np.zeros(4), 0.0, law.kernel_params("plane_strain"))
 
-    from masonry_fdem.contact import _disk_kernels as DK
-    from masonry_fdem.disks import DiskMaterial, Disks
+    from masonry_fdem.interactions.disks import _kernels as DK
+    from masonry_fdem.interactions.disks import DiskMaterial, Disks
 
     dm = DiskMaterial(density=1.0, E=1e6, nu=0.2, rolling_friction=0.1)
     dd = Disks(np.array([[0.0, 0.0], [1.9, 0.0], [9.0, 9.0]]), np.ones(3), {"d": dm}, "d",
@@ -99,8 +102,8 @@ def precompile() -> None:
     dd.advance(1e-3, 0.1)
     DK.brute_force_disk_pairs(dd.x, dd.r, 0.1)
     DK.hertz_force(1.0, 0.5, 0.1, 0.2)
-    from masonry_fdem.contact import _disk_facet_kernels as DF
-    from masonry_fdem.contact.disk_block import _max_node_move
+    from masonry_fdem.interactions.disks import _facet_kernels as DF
+
 
     xd = np.array([[0.5, 1.05]])
     vd = np.zeros((1, 2))
@@ -112,21 +115,21 @@ def precompile() -> None:
                          prm, np.zeros((1, DF.N_HIST)), 1e-3, np.zeros(8), np.zeros((1, 2)),
                          np.zeros(1), np.zeros(DF.N_WORK), np.zeros((1, DF.N_OUT)),
                          np.zeros((4, DF.N_PART)))
-    _max_node_move(X, uu, uu, np.arange(4, dtype=np.int64))
-    from masonry_fdem.packing import pack_disks
+    DK.max_node_move(X, uu, uu, np.arange(4, dtype=np.int64))
+    from masonry_fdem.interactions.disks.packing import pack_disks
 
     pack_disks(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), 0.1, 0.15, 0.5)
 
-    from masonry_fdem.contact.adt import brute_force_pairs, query_adt, self_pairs
+    from masonry_fdem.interactions.search.adt import brute_force_pairs, query_adt, self_pairs
 
     boxes = np.array([[0.0, 0.0, 1.0, 1.0], [0.5, 0.5, 2.0, 2.0], [3.0, 3.0, 4.0, 4.0]])
     self_pairs(boxes, np.array([0, 1, 1]))
     brute_force_pairs(boxes)
-    from masonry_fdem.contact.adt import build_adt
+    from masonry_fdem.interactions.search.adt import build_adt
 
     query_adt(build_adt(boxes), boxes)
 
-    from masonry_fdem import _anchor_kernels as AK
+    from masonry_fdem.interactions.anchors import _kernels as AK
 
     xa = np.array([[0.0, 0.5], [0.5, 0.5]])
     ua = np.zeros(4)

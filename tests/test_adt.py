@@ -7,7 +7,7 @@ dense numpy broadcast; all comparisons are exact (integer pair arrays).
 import numpy as np
 import pytest
 
-from masonry_fdem.contact.adt import brute_force_pairs, build_adt, inflate, query_adt, self_pairs
+from masonry_fdem.interactions.search.adt import brute_force_pairs, build_adt, inflate, query_adt, self_pairs
 
 
 def random_boxes(n: int, dim: int = 2, seed: int = 0, size_ratio: float = 100.0) -> np.ndarray:

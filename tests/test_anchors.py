@@ -15,17 +15,16 @@ import pytest
 from conftest import alternating_grid
 
 from masonry_fdem import Material, Model
-from masonry_fdem.anchors import (
+from masonry_fdem.interactions.anchors import (
     Anchor,
     Anchors,
     BondLaw,
     DowelLaw,
     SteelLaw,
-    intrados_stitch,
-    radial_anchors,
     straight_anchor,
     wall_ties,
 )
+from masonry_fdem.assessment.layouts import intrados_stitch, radial_anchors
 from masonry_fdem.geometry import BlockMesh
 from masonry_fdem.solvers import DynamicRelaxation, ExplicitSolver
 
@@ -122,7 +121,7 @@ def two_blocks_across_a_dry_joint(anchor_kw, comm=MPI.COMM_SELF):
     """Blocks A = [0, 0.3] × [0, 0.2] (fixed) and B = [0.3, 0.6] × [0, 0.2] (moved as a
     whole by the prescription "B") with a dry frictional joint (a broken mortar joint)
     between them and an anchor from x = 0.11 to 0.49 at mid-height across it."""
-    from masonry_fdem.contact import BlockContact, ContactSettings
+    from masonry_fdem.interactions import BlockContact, ContactSettings
 
     blocks = grid_blocks([(0, 0, 0.3, 0.2), (0.3, 0, 0.6, 0.2)], 0.02)
     model = Model(blocks, {"brick": BRICK}, width=0.2, comm=comm)
@@ -220,7 +219,7 @@ def test_prestressed_anchor_puts_the_blocks_in_compression():
     """An anchor with end plates through two blocks (A fixed, B free, dry joint between)
     jacked to P = 20 kN: the joint carries P in compression (1 %); after lock-off the bar
     holds P and the joint still carries it."""
-    from masonry_fdem.contact import BlockContact, ContactSettings
+    from masonry_fdem.interactions import BlockContact, ContactSettings
 
     comm = MPI.COMM_WORLD
     blocks = grid_blocks([(0, 0, 0.3, 0.2), (0.3, 0, 0.6, 0.2)], 0.02)
@@ -256,7 +255,7 @@ def _tied_pier(comm):
     a vertical tie (bonded, 16 mm, with a dowel law) through the courses and a lateral
     load at the top; gravity. Solved by DR in two increments, then shaken by an
     explicit run (the lateral load removed)."""
-    from masonry_fdem.contact import BlockContact, ContactSettings
+    from masonry_fdem.interactions import BlockContact, ContactSettings
 
     boxes = [(0.0, -0.1, 0.3, 0.0)] + [(0.0, 0.15 * k, 0.3, 0.15 * (k + 1)) for k in range(4)]
     blocks = grid_blocks(boxes, 0.05)
@@ -463,7 +462,7 @@ def test_bond_law_return_unloads_with_plastic_slip():
     """Kernel check: loading past the peak then unloading follows the initial stiffness
     from the envelope point reached; reverse loading meets the envelope at −τ_env of
     the accumulated slip."""
-    from masonry_fdem import _anchor_kernels as AK
+    from masonry_fdem.interactions.anchors import _kernels as AK
 
     law = BondLaw((1e-4, 1e-3, 2e-3), (2e6, 2e6, 0.5e6))
     ls, lt = np.array(law.slip), np.array(law.stress)

@@ -18,8 +18,8 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from masonry_fdem.assess import assess
-from masonry_fdem.case import CaseError, load_case
+from masonry_fdem.assessment.assess import assess
+from masonry_fdem.assessment.case import CaseError, load_case
 from masonry_fdem.cli import main as cli_main
 
 DRY_ARCH = {
@@ -219,7 +219,7 @@ def test_damage_scenarios_reach_the_model():
     block fewer; an open joint, ring separation over a zone and decayed mortar leave the
     bonded joints of the undamaged arch fewer or weaker (the model is built, not run;
     here the ring interfaces are bonded by the mortar too)."""
-    from masonry_fdem.assess import build_model
+    from masonry_fdem.assessment.assess import build_model
 
     base = {
         "arch": {"span": 2.0, "rings": 2, "ring_thickness": 0.15, "voussoirs": [8, 9],

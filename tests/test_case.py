@@ -12,7 +12,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from masonry_fdem.case import (
+from masonry_fdem.assessment.case import (
     EXAMPLE_CASE,
     TONNE_FORCE,
     ArchCase,
@@ -21,9 +21,9 @@ from masonry_fdem.case import (
     load_case,
     prepare_run_folder,
 )
-from masonry_fdem.contact.joints import JointMaterial
+from masonry_fdem.interactions.joints.joints import JointMaterial
 from masonry_fdem.geometry import arch_layout
-from masonry_fdem.limit_analysis import find_interfaces
+from masonry_fdem.solvers.limit_analysis import find_interfaces
 
 
 def example() -> dict:

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import BlockContact, ContactSettings
+from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.geometry import BlockLayout, rectangle
-from masonry_fdem.limit_analysis import limit_analysis
+from masonry_fdem.solvers.limit_analysis import limit_analysis
 from masonry_fdem.solvers import DynamicRelaxation
 
 

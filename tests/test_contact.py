@@ -10,7 +10,7 @@ from conftest import rectangle
 
 from masonry_fdem import Material, Model
 from masonry_fdem.constants import G
-from masonry_fdem.contact import BlockContact, ContactSettings
+from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.geometry import mesh_blocks
 from masonry_fdem.solvers import DynamicRelaxation, ExplicitSolver
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from masonry_fdem.contact import _disk_facet_kernels as D
+from masonry_fdem.interactions.disks import _facet_kernels as D
 
 RNG_SEED = 20240611
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from masonry_fdem.contact import _disk_kernels as D
+from masonry_fdem.interactions.disks import _kernels as D
 
 RHO = 2600.0  # [kg/m³]
 THICK = 0.1  # out-of-plane thickness w [m]

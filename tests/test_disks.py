@@ -12,8 +12,8 @@ import pytest
 from conftest import rectangle
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import _disk_kernels as DK
-from masonry_fdem.disks import DiskMaterial, Disks
+from masonry_fdem.interactions.disks import _kernels as DK
+from masonry_fdem.interactions.disks import DiskMaterial, Disks
 from masonry_fdem.geometry import mesh_blocks
 from masonry_fdem.solvers import ExplicitSolver
 
@@ -101,7 +101,7 @@ def test_disk_output_and_picture(tmp_path):
 
 @pytest.mark.parametrize("porosity", [0.35, 0.22])
 def test_packing_fills_a_region_at_the_target_porosity(porosity):
-    from masonry_fdem.packing import pack_disks
+    from masonry_fdem.interactions.disks.packing import pack_disks
 
     poly = np.array([[0.0, 0.0], [0.6, 0.0], [0.6, 0.3], [0.3, 0.45], [0.0, 0.3]])
     x, r = pack_disks(poly, 0.008, 0.016, porosity, seed=2)
@@ -127,7 +127,7 @@ def test_packing_fills_a_region_at_the_target_porosity(porosity):
 
 def test_disk_on_a_deformable_block_by_dynamic_relaxation():
     """The disks take part in dynamic relaxation: a disk on a deformable block."""
-    from masonry_fdem.contact import DiskBlockContact
+    from masonry_fdem.interactions import DiskBlockContact
     from masonry_fdem.solvers import DynamicRelaxation
 
     blocks = mesh_blocks([rectangle(0.0, 0.0, 0.2, 0.05)], materials="stone", mesh_size=0.02,
@@ -148,7 +148,7 @@ def test_disk_on_a_deformable_block_by_dynamic_relaxation():
 
 
 def test_disk_resting_on_a_deformable_block_loads_it_with_its_weight():
-    from masonry_fdem.contact import DiskBlockContact
+    from masonry_fdem.interactions import DiskBlockContact
 
     blocks = mesh_blocks([rectangle(0.0, 0.0, 0.2, 0.05)], materials="stone", mesh_size=0.02,
                          comm=MPI.COMM_WORLD)
@@ -166,8 +166,8 @@ def test_disk_resting_on_a_deformable_block_loads_it_with_its_weight():
 
 
 def test_settled_column_base_carries_the_weight():
-    from masonry_fdem.contact import DiskBlockContact
-    from masonry_fdem.packing import pack_disks
+    from masonry_fdem.interactions import DiskBlockContact
+    from masonry_fdem.interactions.disks.packing import pack_disks
 
     comm = MPI.COMM_WORLD
     polys = [rectangle(-0.02, -0.02, 0.08, 0.0), rectangle(-0.02, 0.0, 0.0, 0.2),
@@ -196,8 +196,8 @@ def test_settled_column_base_carries_the_weight():
 
 
 def _column(comm, t_end):
-    from masonry_fdem.contact import DiskBlockContact
-    from masonry_fdem.packing import pack_disks
+    from masonry_fdem.interactions import DiskBlockContact
+    from masonry_fdem.interactions.disks.packing import pack_disks
 
     polys = [rectangle(-0.02, -0.02, 0.08, 0.0), rectangle(-0.02, 0.0, 0.0, 0.2),
              rectangle(0.06, 0.0, 0.08, 0.2)]

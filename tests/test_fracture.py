@@ -15,7 +15,7 @@ import pytest
 from conftest import alternating_grid
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import JointMaterial, Joints
+from masonry_fdem.interactions import JointMaterial, Joints
 from masonry_fdem.geometry import BlockMesh
 from masonry_fdem.solvers import ExplicitSolver
 

@@ -16,7 +16,7 @@ import pytest
 from mpi4py import MPI
 
 from masonry_fdem import Material, Model
-from masonry_fdem.contact import JointMaterial, Joints
+from masonry_fdem.interactions import JointMaterial, Joints
 from masonry_fdem.geometry import build_stack
 from masonry_fdem.solvers import DynamicRelaxation
 
@@ -184,7 +184,7 @@ def test_softening_that_would_snap_back_is_refused():
 
 
 def test_broken_open_joint_is_handed_to_contact_without_a_force_jump():
-    from masonry_fdem.contact import BlockContact, ContactSettings
+    from masonry_fdem.interactions import BlockContact, ContactSettings
 
     jm = JointMaterial(**MORTAR)
     blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick")

@@ -1,4 +1,4 @@
-"""Rigid-block limit analysis (masonry_fdem.limit_analysis) against hand-derived values.
+"""Rigid-block limit analysis (masonry_fdem.solvers.limit_analysis) against hand-derived values.
 
 Every case is a small linear programme solved identically on every rank, so the file runs
 unchanged under ``mpirun -n 2 python -m pytest``. Timing on the development machine: each
@@ -13,7 +13,7 @@ import pytest
 
 from masonry_fdem.geometry import BlockLayout, arch_layout, rectangle
 from masonry_fdem.geometry.polygons import polygon_area, polygon_centroid
-from masonry_fdem.limit_analysis import (
+from masonry_fdem.solvers.limit_analysis import (
     HingeKind,
     LimitStatus,
     find_interfaces,

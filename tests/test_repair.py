@@ -16,10 +16,10 @@ from mpi4py import MPI
 
 import pytest
 
-from masonry_fdem.assess import assess
-from masonry_fdem.case import AnchorLayout, CaseError, SearchSpec, load_case
+from masonry_fdem.assessment.assess import assess
+from masonry_fdem.assessment.case import AnchorLayout, CaseError, SearchSpec, load_case
 from masonry_fdem.cli import main as cli_main
-from masonry_fdem.repair import SearchInterrupted, compare, search
+from masonry_fdem.assessment.repair import SearchInterrupted, compare, search
 
 MATERIALS = {"brick": {"density": 2000.0, "E": 10e9, "nu": 0.2},
              "abutment": {"density": 2000.0, "E": 30e9, "nu": 0.2}}
@@ -262,7 +262,7 @@ def test_prestressed_anchor_is_locked_off_before_the_load():
 def test_repair_example_is_a_valid_case():
     import tomllib
 
-    from masonry_fdem.case import REPAIR_EXAMPLE
+    from masonry_fdem.assessment.case import REPAIR_EXAMPLE
 
     case = load_case(tomllib.loads(REPAIR_EXAMPLE), name="repair")
     assert case.loading.control.value == "displacement"

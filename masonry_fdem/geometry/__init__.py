@@ -19,7 +19,7 @@ Typical use::
 Lengths are in metres, areas in square metres.
 """
 
-from masonry_fdem.geometry.arches import ArchKind, arch_curve, arch_layout, build_arch
+from masonry_fdem.geometry.arches import ArchKind, arch_circle, arch_curve, arch_layout, build_arch
 from masonry_fdem.geometry.blockmesh import BlockMesh, unit_name
 from masonry_fdem.geometry.grids import crossed_grid, graded
 from masonry_fdem.geometry.layout import (

@@ -46,7 +46,7 @@ import numpy as np
 from masonry_fdem.geometry.blockmesh import BlockMesh
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["ArchKind", "arch_layout", "arch_curve", "build_arch"]
+__all__ = ["ArchKind", "arch_circle", "arch_layout", "arch_curve", "build_arch"]
 
 # parameters closer than this are the same vertex
 _S_TOL = 1e-10
@@ -58,6 +58,44 @@ class ArchKind(Enum):
     SEMICIRCULAR = "semicircular"
     SEGMENTAL = "segmental"
     POINTED = "pointed"
+
+
+def _check_span_rise(kind: ArchKind, span: float, rise: float | None) -> None:
+    if not (np.isfinite(span) and span > 0.0):
+        raise ValueError(f"span must be positive, got {span}")
+    half = 0.5 * span
+    if kind is ArchKind.SEMICIRCULAR:
+        if rise is not None and abs(rise - half) > 1e-12 * span:
+            raise ValueError(f"a semicircular arch has rise span/2 = {half}, got {rise}; "
+                             "use kind='segmental' or 'pointed'")
+    elif rise is None or not (np.isfinite(rise) and rise > 0.0):
+        raise ValueError(f"a {kind.value} arch needs a positive rise, got {rise}")
+    elif kind is ArchKind.SEGMENTAL and rise >= half:
+        raise ValueError(f"a segmental arch needs rise < span/2 = {half}, got {rise}")
+
+
+def arch_circle(kind: ArchKind | str, span: float, rise: float | None = None
+                ) -> tuple[float, float, float]:
+    """Intrados circle of a semicircular or segmental arch.
+
+    Args:
+        kind: "semicircular" or "segmental" (a pointed arch has two centres: refused).
+        span: clear span [m]; rise: intrados rise [m] (span/2 or None if semicircular).
+
+    Returns:
+        ``(radius, yc, alpha)``: intrados radius [m], height of the centre above the
+        springing line [m] (≤ 0), half the opening angle [rad]; origin at mid-span.
+    """
+    kind = ArchKind(kind)
+    if kind is ArchKind.POINTED:
+        raise ValueError("a pointed arch has no single centre: this needs a circular "
+                         "(semicircular or segmental) arch")
+    _check_span_rise(kind, span, rise)
+    half = 0.5 * span
+    if kind is ArchKind.SEMICIRCULAR:
+        return half, 0.0, 0.5 * math.pi
+    radius = (half * half + rise * rise) / (2.0 * rise)
+    return radius, rise - radius, math.asin(half / radius)
 
 
 def arch_curve(
@@ -77,22 +115,12 @@ def arch_curve(
         springing line.
     """
     kind = ArchKind(kind)
-    if not (np.isfinite(span) and span > 0.0):
-        raise ValueError(f"span must be positive, got {span}")
-    half = 0.5 * span
-    if kind is ArchKind.SEMICIRCULAR:
-        if rise is not None and abs(rise - half) > 1e-12 * span:
-            raise ValueError(f"a semicircular arch has rise span/2 = {half}, got {rise}; "
-                             "use kind='segmental' or 'pointed'")
-        radius, yc, alpha = half, 0.0, 0.5 * math.pi
+    if kind is not ArchKind.POINTED:
+        radius, yc, alpha = arch_circle(kind, span, rise)
         kind = ArchKind.SEGMENTAL
-    elif rise is None or not (np.isfinite(rise) and rise > 0.0):
-        raise ValueError(f"a {kind.value} arch needs a positive rise, got {rise}")
-    elif kind is ArchKind.SEGMENTAL:
-        if rise >= half:
-            raise ValueError(f"a segmental arch needs rise < span/2 = {half}, got {rise}")
-        radius = (half * half + rise * rise) / (2.0 * rise)
-        yc, alpha = rise - radius, math.asin(half / radius)
+    else:
+        _check_span_rise(kind, span, rise)
+        half = 0.5 * span
     if kind is ArchKind.SEGMENTAL:
 
         def circular(s: np.ndarray, d: float) -> np.ndarray:

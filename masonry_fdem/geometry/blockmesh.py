@@ -504,7 +504,7 @@ class BlockMesh:
 
         Each triangle of a selected block becomes a block of its own, named
         ``"<unit>#<k>"`` (see :func:`unit_name`), with its own three nodes; the bonded
-        joints (:class:`~masonry_fdem.contact.Joints`) then tie the pieces back together
+        joints (:class:`~masonry_fdem.interactions.Joints`) then tie the pieces back together
         with the unit's cohesive crack law, so cracks can open along any element edge.
 
         Args:

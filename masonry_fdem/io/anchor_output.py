@@ -25,7 +25,7 @@ class AnchorOutput:
     """Writes the anchors at chosen times.
 
     Args:
-        anchors: the :class:`~masonry_fdem.anchors.Anchors`.
+        anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors`.
         folder: output folder (created).
     """
 

@@ -23,7 +23,7 @@ class DiskOutput:
     """Writes the disks at chosen times (rank 0).
 
     Args:
-        disks: the :class:`~masonry_fdem.disks.Disks` set.
+        disks: the :class:`~masonry_fdem.interactions.disks.Disks` set.
         folder: output folder (created).
     """
 

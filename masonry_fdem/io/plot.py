@@ -38,12 +38,12 @@ def plot_blocks(
         title: picture title.
         cmap: matplotlib colour map.
         show_edges: draw the triangle edges.
-        joints: the model's :class:`~masonry_fdem.contact.Joints`: joints that are not
+        joints: the model's :class:`~masonry_fdem.interactions.Joints`: joints that are not
             intact are drawn over the blocks, coloured by state (softening, open, sliding,
             crushed) — the crack pattern.
-        disks: a :class:`~masonry_fdem.disks.Disks` set, drawn as grey circles with a
+        disks: a :class:`~masonry_fdem.interactions.disks.Disks` set, drawn as grey circles with a
             radius line showing their rotation.
-        anchors: the :class:`~masonry_fdem.anchors.Anchors`, drawn as thick lines
+        anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors`, drawn as thick lines
             coloured by their axial force per bar [N] (second colour bar); ruptured bar
             elements are drawn dashed in grey.
 
@@ -110,7 +110,7 @@ def plot_blocks(
     seg = xy[blocks.boundary_facets]
     ax.add_collection(LineCollection(seg, colors="k", linewidths=0.4))
     if jseg is not None:
-        from masonry_fdem.contact.joints import JOINT_STATES
+        from masonry_fdem.interactions.joints.joints import JOINT_STATES
 
         colours = {1: "gold", 2: "red", 3: "blue", 4: "magenta"}
         for code, colour in colours.items():

@@ -3,7 +3,7 @@
 Two time series in the run folder: ``displacement.bp`` (nodal displacement and velocity,
 P1) and ``stress.bp`` (Cauchy stress per cell, DG0); with bonded joints a third,
 ``joints.bp``: the worst joint state along each cell's edges (DG0; 0 intact, 1 softening,
-2 open, 3 sliding, 4 crushed, see :data:`masonry_fdem.contact.JOINT_STATES`). Open them in ParaView with the ADIOS2
+2 open, 3 sliding, 4 crushed, see :data:`masonry_fdem.interactions.JOINT_STATES`). Open them in ParaView with the ADIOS2
 VTX reader and apply "Warp By Vector" on the displacement. Models with history or plastic
 laws also get ``materials.bp`` (DG0): history variables such as "kappa", the "damage",
 "plastic_strain" (accumulated α) and "plastic_work_density" [J/m³].

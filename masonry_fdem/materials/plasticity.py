@@ -33,9 +33,10 @@ from masonry_fdem.materials import _finite_plastic as FP
 from masonry_fdem.materials import _plastic_kernels as PK
 from masonry_fdem.materials.elastic import Hypothesis, Material
 
-__all__ = ["ReturnMapping", "MohrCoulomb", "DruckerPrager", "N_STATE"]
+__all__ = ["ReturnMapping", "MohrCoulomb", "DruckerPrager", "N_STATE", "PLASTIC_WORK"]
 
 N_STATE = PK.N_STATE
+PLASTIC_WORK = PK.S_WP  # column of the plastic work density [J/m³] in the state
 
 
 def _finite(obj, *names, lo=None, hi=None, strict_lo=False):

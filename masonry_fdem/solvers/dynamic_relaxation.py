@@ -95,18 +95,18 @@ class DynamicRelaxation:
         ke_tol: fictitious kinetic energy tolerance relative to its peak in the increment.
         max_iter: iteration limit per load increment.
         mass_safety: α in the fictitious mass bound (≥ 1).
-        contact: a :class:`~masonry_fdem.contact.BlockContact`, the bonded
-            :class:`~masonry_fdem.contact.Joints`, a sequence of them, or None. Their
+        contact: a :class:`~masonry_fdem.interactions.BlockContact`, the bonded
+            :class:`~masonry_fdem.interactions.Joints`, a sequence of them, or None. Their
             springs enter the fictitious masses; their forces (without restitution damping)
             enter the residual; friction slips by the fictitious displacement increments.
             Joint states are trial states computed from the last converged increment and
             committed only when an increment converges. So is the material state of the
             blocks (damage, plastic strain): committed only at a converged increment.
-        disks: a :class:`~masonry_fdem.disks.Disks` set with its block couplings: the disk
+        disks: a :class:`~masonry_fdem.interactions.disks.Disks` set with its block couplings: the disk
             positions and rotations join the unknowns, with fictitious masses from the
             bound of their contact stiffness (the disks' friction histories follow the
             iteration; they are not rolled back).
-        anchors: the :class:`~masonry_fdem.anchors.Anchors` of the model: their bar nodes
+        anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors` of the model: their bar nodes
             join the unknowns, with fictitious masses from their stiffness row sums; their
             bond and steel states are committed at converged increments only.
         damping: "displacement" (Underwood: the Rayleigh quotient of the displacement

@@ -63,12 +63,12 @@ class ExplicitSolver:
         safety: fraction of the critical step used when ``dt`` is None.
         damping: mass-proportional damping coefficient α [1/s] (f_damp = α M v).
         load_factor: factor on the live loads (constant, or a function of time).
-        contact: a :class:`~masonry_fdem.contact.BlockContact`, the bonded
-            :class:`~masonry_fdem.contact.Joints`, a sequence of them, or None (blocks do not
+        contact: a :class:`~masonry_fdem.interactions.BlockContact`, the bonded
+            :class:`~masonry_fdem.interactions.Joints`, a sequence of them, or None (blocks do not
             interact). Their springs are included in the stable time step.
-        disks: a :class:`~masonry_fdem.disks.Disks` set (granular fill) advanced by the same
+        disks: a :class:`~masonry_fdem.interactions.disks.Disks` set (granular fill) advanced by the same
             step, with its couplings to the blocks; its contact springs bound the step too.
-        anchors: the :class:`~masonry_fdem.anchors.Anchors` of the model (repairs): their
+        anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors` of the model (repairs): their
             bar nodes are advanced by the same step; their springs bound the step.
 
     Raises:

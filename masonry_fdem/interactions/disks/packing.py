@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from masonry_fdem.contact._disk_kernels import disk_pairs_cell_list
+from masonry_fdem.interactions.disks._kernels import disk_pairs_cell_list
 
 __all__ = ["pack_disks", "spatial_order"]
 

@@ -31,7 +31,7 @@ Schema (``*``: required):
     ``density``\\* [kg/m³], ``E``\\* [Pa], ``nu``\\* — one table per block material; those
     named in ``[arch]`` must exist.
 ``[joints.mortar]``\\*
-    The :class:`~masonry_fdem.contact.joints.JointMaterial` of the joints between voussoirs
+    The :class:`~masonry_fdem.interactions.joints.joints.JointMaterial` of the joints between voussoirs
     and at the springings: ``kn``, ``ks`` [Pa/m] (default from the blocks' E), ``ft`` [Pa],
     ``GfI`` [N/m], ``c`` [Pa], ``tan_phi``, ``GfII`` [N/m], ``tan_psi``,
     ``psi_confinement`` [Pa], ``psi_decay`` [1/m], ``fc`` [Pa], ``Cs``, ``kappa_p`` [m],
@@ -85,15 +85,15 @@ Schema (``*``: required):
     (1); ``prestress`` [N] (0); ``plates`` "none", "start", "end" or "both"; optional
     ``bond_diameter`` [m], ``segment`` [m], ``name``; ``[anchors.steel]`` ``E``,
     ``yield_stress`` [Pa], ``hardening`` [Pa], ``rupture_strain``, ``density``
-    (:class:`~masonry_fdem.anchors.SteelLaw`); ``[anchors.bond]`` ``slip`` [m] and
-    ``stress`` [Pa] lists (:class:`~masonry_fdem.anchors.BondLaw`). Circular arches only.
+    (:class:`~masonry_fdem.interactions.anchors.SteelLaw`); ``[anchors.bond]`` ``slip`` [m] and
+    ``stress`` [Pa] lists (:class:`~masonry_fdem.interactions.anchors.BondLaw`). Circular arches only.
     ``layout = "inclined"``: straight anchors drilled from the intrados (``positions``\\*:
     s of the entry points; ``inclination`` [deg] to the intrados tangent, 90 = radial,
     below 90 leaning towards the right springing; ``length`` [m], default through to
     ``cover`` below the extrados). An anchor that leaves the structure is refused.
 ``[search]``
     The candidate space of an anchor layout search (:class:`SearchSpec`,
-    :func:`masonry_fdem.repair.search`): ``positions`` (s), ``counts`` (anchors per
+    :func:`masonry_fdem.assessment.repair.search`): ``positions`` (s), ``counts`` (anchors per
     layout, [1]), ``inclinations`` [deg] ([90]), ``lengths`` [m] or "through"
     (["through"]), ``prestress`` [N] ([0]); every combination, plus explicit
     ``[[search.layouts]]`` (``positions``\\*, ``inclination``, ``length``, ``prestress``).
@@ -124,16 +124,10 @@ from typing import Any
 
 import numpy as np
 
-from masonry_fdem.anchors import (
-    Anchor,
-    BondLaw,
-    SteelLaw,
-    inclined_anchors,
-    intrados_stitch,
-    radial_anchors,
-)
+from masonry_fdem.assessment.layouts import inclined_anchors, intrados_stitch, radial_anchors
 from masonry_fdem.constants import G
-from masonry_fdem.contact.joints import JointMaterial
+from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
+from masonry_fdem.interactions.joints.joints import JointMaterial
 from masonry_fdem.geometry.arches import ArchKind, _ring_pieces, arch_layout
 from masonry_fdem.geometry.layout import BlockLayout
 from masonry_fdem.materials.elastic import Material
@@ -466,7 +460,7 @@ class AnchorSpec:
 @dataclass(frozen=True)
 class AnchorLayout:
     """One candidate of a layout search: straight anchors drilled from the intrados
-    (see :func:`~masonry_fdem.anchors.inclined_anchors`), all alike.
+    (see :func:`~masonry_fdem.assessment.layouts.inclined_anchors`), all alike.
 
     Attributes:
         positions: s of the entry points (0: left springing, 1: right springing).
@@ -506,7 +500,7 @@ class Objective(StrEnum):
 @dataclass(frozen=True)
 class SearchSpec:
     """The ``[search]`` table: the candidate space of a layout search (see
-    :func:`masonry_fdem.repair.search`). Lengths [m], angles [deg], forces [N].
+    :func:`masonry_fdem.assessment.repair.search`). Lengths [m], angles [deg], forces [N].
 
     The candidates are every combination of ``count`` positions out of ``positions``
     (for each of ``counts``), with each of ``inclinations``, ``lengths`` and
@@ -610,7 +604,7 @@ class ArchCase:
         return dict(self.material_table)
 
     def anchors(self) -> list[Anchor]:
-        """The ``[[anchors]]`` as :class:`~masonry_fdem.anchors.Anchor` objects."""
+        """The ``[[anchors]]`` as :class:`~masonry_fdem.interactions.anchors.Anchor` objects."""
         return [a for spec in self.anchor_specs for a in spec.build(self.arch)]
 
     def anchor_problems(self, anchors: Sequence[Anchor] | None = None,
@@ -679,20 +673,20 @@ class ArchCase:
 
     def joint_materials(self) -> dict[tuple[str, str], JointMaterial]:
         """Joint material per pair of block materials (the mortar) for
-        :class:`~masonry_fdem.contact.joints.Joints`; see :meth:`joint_rules` for the rest."""
+        :class:`~masonry_fdem.interactions.joints.joints.Joints`; see :meth:`joint_rules` for the rest."""
         v, a = self.arch.voussoir_material, self.arch.abutment_material
         return {(v, v): self.mortar, (v, a): self.mortar}
 
     def joint_rules(
         self, layout: BlockLayout | None = None
     ) -> list[tuple[Callable[[np.ndarray], bool], JointMaterial | None]]:
-        """``where`` rules of :class:`~masonry_fdem.contact.joints.Joints`: the ring
+        """``where`` rules of :class:`~masonry_fdem.interactions.joints.joints.Joints`: the ring
         interfaces and the damaged joints (None: no bond, left to the contact).
 
         A joint segment matches a rule when its midpoint lies on one of the rule's
         interfaces of ``layout`` (default :meth:`layout`).
         """
-        from masonry_fdem.limit_analysis import find_interfaces
+        from masonry_fdem.solvers.limit_analysis import find_interfaces
 
         layout = self.layout() if layout is None else layout
         itf = find_interfaces(layout)
@@ -741,10 +735,10 @@ class ArchCase:
 
     def limit_analysis(self, **kw: Any):
         """Rigid-block collapse load of the case by
-        :func:`~masonry_fdem.limit_analysis.limit_analysis`: the live load is 1 N shared by
+        :func:`~masonry_fdem.solvers.limit_analysis.limit_analysis`: the live load is 1 N shared by
         :meth:`load_points`, so the load factor is the collapse load [N]. Keywords
         override the arguments (e.g. ``friction``)."""
-        from masonry_fdem.limit_analysis import limit_analysis
+        from masonry_fdem.solvers.limit_analysis import limit_analysis
 
         pts = self.load_points()
         args = dict(

@@ -34,10 +34,10 @@ from dolfinx import cpp as _cpp
 from masonry_fdem.constants import G
 from masonry_fdem.materials import Hypothesis, Material, green_lagrange, lame_parameters
 from masonry_fdem.materials.base import LawContext
-from masonry_fdem.materials.plasticity import ReturnMapping
+from masonry_fdem.materials.plasticity import PLASTIC_WORK, ReturnMapping
 from masonry_fdem.materials.quadrature import QuadratureState
 from masonry_fdem.parallel import DistributedBlockMesh, create_block_mesh
-from masonry_fdem.solvers import _kernels as K
+from masonry_fdem.model import _kernels as K
 
 if TYPE_CHECKING:
     from masonry_fdem.geometry import BlockMesh
@@ -313,7 +313,7 @@ class Model:
             live: scaled by the load factor (dynamic relaxation) if True.
             blocks: restrict the search to these blocks.
         """
-        node = self._nearest_node(point, blocks)
+        node = self.nearest_node(point, blocks)
         f = np.zeros_like(self.f_int)
         if node >= 0:
             f[2 * node : 2 * node + 2] = np.asarray(force, dtype=float)
@@ -449,7 +449,7 @@ class Model:
     # ------------------------------------------------------------------ monitors
     def monitor(self, name: str, point: Sequence[float], blocks=None) -> None:
         """Record the displacement [m] of the node nearest ``point`` in the history."""
-        node = self._nearest_node(point, blocks)
+        node = self.nearest_node(point, blocks)
         owner = self.comm.allreduce(self.comm.rank if node >= 0 else -1, op=MPI.MAX)
         self.monitors[name] = (owner, node)
 
@@ -463,7 +463,7 @@ class Model:
             out[name] = self.comm.bcast(val, root=owner)
         return out
 
-    def _nearest_node(self, point, blocks=None) -> int:
+    def nearest_node(self, point, blocks=None) -> int:
         """Local index of the globally nearest node, or -1 if it lives on another rank."""
         p = np.asarray(point, dtype=float)
         cand = np.arange(self.n_nodes) if blocks is None else self._block_nodes(blocks)
@@ -565,15 +565,9 @@ class Model:
         qs = self.qstate
         if not qs.has_return_mapping:
             return 0.0
-        from masonry_fdem.materials.plasticity import PK
-
         area = np.abs(self.blocks.cell_area[self.dmesh.cell_input])
-        wp = qs.s0[qs.qdofs, PK.S_WP].mean(axis=1)
+        wp = qs.s0[qs.qdofs, PLASTIC_WORK].mean(axis=1)
         return self.comm.allreduce(float(np.dot(wp, area)) * self.width)
-
-    def update_constants(self) -> None:
-        """Re-pack the form constants after changing a material Constant."""
-        self._constants = dolfinx.fem.pack_constants(self.f_int_form)
 
     def strain_energy(self) -> float:
         """Exact stored strain energy ∫ W(E) w dX [J] (collective)."""

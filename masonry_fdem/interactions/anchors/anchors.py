@@ -50,7 +50,8 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem import _anchor_kernels as AK
+from masonry_fdem.geometry.locate import locate_in_block, locate_points
+from masonry_fdem.interactions.anchors import _kernels as AK
 
 __all__ = [
     "SteelLaw",
@@ -59,9 +60,6 @@ __all__ = [
     "Anchor",
     "Anchors",
     "straight_anchor",
-    "radial_anchors",
-    "intrados_stitch",
-    "inclined_anchors",
     "wall_ties",
 ]
 
@@ -295,56 +293,6 @@ class Anchor:
         return self.steel.yield_stress * self.area
 
 
-def _in_triangles(tri: np.ndarray, q: np.ndarray, tol: float):
-    """Index of the first triangle of ``tri`` (k, 3, 2) holding ``q`` and its barycentric
-    coordinates, or (-1, None)."""
-    a, e1, e2 = tri[:, 0], tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    d = q - a
-    s = (d[:, 0] * e2[:, 1] - d[:, 1] * e2[:, 0]) / det
-    t = (e1[:, 0] * d[:, 1] - e1[:, 1] * d[:, 0]) / det
-    inside = np.flatnonzero((s >= -tol) & (t >= -tol) & (s + t <= 1.0 + tol))
-    if inside.size == 0:
-        return -1, None
-    k = inside[0]
-    w = np.clip(np.array([1.0 - s[k] - t[k], s[k], t[k]]), 0.0, None)
-    return int(k), w / w.sum()
-
-
-def _locate_in_block(blocks, b: int, q: np.ndarray, tol: float = 1e-6):
-    """Global cell of block ``b`` holding (or, within ``tol``, touching) point ``q`` and
-    its barycentric coordinates; the nearest cell if none does (a bar node on the
-    block's boundary)."""
-    c0, c1 = blocks.cell_offsets[b], blocks.cell_offsets[b + 1]
-    tri = blocks.x[blocks.cells[c0:c1]]
-    k, w = _in_triangles(tri, q, tol)
-    if k < 0:  # nearest centroid, coordinates clipped onto that triangle
-        k = int(np.argmin(np.linalg.norm(tri.mean(axis=1) - q, axis=1)))
-        _, w = _in_triangles(tri[k:k + 1], q, np.inf)
-    return c0 + k, w
-
-
-def _locate(blocks, pts: np.ndarray, tol: float = 1e-9):
-    """Global host cell (-1 if none) and barycentric coordinates of each point; a point
-    on the common edge of two blocks goes to the lower block id."""
-    n = pts.shape[0]
-    cell = np.full(n, -1, dtype=np.int64)
-    bary = np.zeros((n, 3))
-    bb = blocks.block_bounds
-    pad = tol * max(float(np.ptp(blocks.x, axis=0).max()), 1.0)
-    for i, q in enumerate(pts):
-        cand = np.flatnonzero((bb[:, 0] - pad <= q[0]) & (q[0] <= bb[:, 2] + pad)
-                              & (bb[:, 1] - pad <= q[1]) & (q[1] <= bb[:, 3] + pad))
-        for b in cand:
-            c0, c1 = blocks.cell_offsets[b], blocks.cell_offsets[b + 1]
-            k, w = _in_triangles(blocks.x[blocks.cells[c0:c1]], q, tol)
-            if k >= 0:
-                cell[i] = c0 + k
-                bary[i] = w
-                break
-    return cell, bary
-
-
 def _boundary_crossings(blocks, p: np.ndarray, q: np.ndarray, seg: float) -> list[float]:
     """Parameters t in (0, 1) of the forced bar nodes of the segment p→q.
 
@@ -375,7 +323,7 @@ def _boundary_crossings(blocks, p: np.ndarray, q: np.ndarray, seg: float) -> lis
     eps = 1e-7
     out: list[float] = []
     for k, tt in enumerate(ts):
-        sides = _locate(blocks, np.array([p + (tt - eps) * r, p + (tt + eps) * r]))[0] >= 0
+        sides = locate_points(blocks, np.array([p + (tt - eps) * r, p + (tt + eps) * r]))[0] >= 0
         if sides[0] != sides[1]:
             out.append(tt)
             continue
@@ -461,7 +409,7 @@ class Anchors:
         # on either side)
         xa, xb = self.x[self.conn[:, 0]], self.x[self.conn[:, 1]]
         quarter = np.vstack([0.75 * xa + 0.25 * xb, 0.25 * xa + 0.75 * xb])
-        qcell, _ = _locate(blocks, quarter)
+        qcell, _ = locate_points(blocks, quarter)
         qblock = np.where(qcell >= 0, blocks.cell_block[np.maximum(qcell, 0)], -1)
         half_block = qblock.reshape(2, ne).T  # (element, side)
         self.bonded_element = np.any(half_block >= 0, axis=1)
@@ -477,7 +425,7 @@ class Anchors:
         gcell = np.empty(nh, dtype=np.int64)
         bary = np.empty((nh, 3))
         for h in range(nh):
-            gcell[h], bary[h] = _locate_in_block(blocks, int(hblock[h]), self.x[self.hnode[h]])
+            gcell[h], bary[h] = locate_in_block(blocks, int(hblock[h]), self.x[self.hnode[h]])
         self.host_block = hblock
         inv = np.full(blocks.n_nodes, -1, dtype=np.int64)
         inv[model.node_input] = np.arange(model.n_nodes)
@@ -778,174 +726,6 @@ def straight_anchor(start: Sequence[float], end: Sequence[float], diameter: floa
                     **kw) -> Anchor:
     """A straight anchor from ``start`` to ``end`` [m] (other arguments as :class:`Anchor`)."""
     return Anchor(np.array([start, end], dtype=float), diameter, **kw)
-
-
-def _arch_geometry(kind, span, rise):
-    from masonry_fdem.geometry.arches import ArchKind, arch_curve
-
-    kind = ArchKind(kind)
-    if kind is ArchKind.POINTED:
-        raise ValueError("angle-based anchor layouts need a circular (semicircular or "
-                         "segmental) arch")
-    half = 0.5 * span
-    if kind is ArchKind.SEMICIRCULAR:
-        radius, yc, alpha = half, 0.0, 0.5 * math.pi
-    else:
-        radius = (half * half + rise * rise) / (2.0 * rise)
-        yc, alpha = rise - radius, math.asin(half / radius)
-    arch_curve(kind, span, rise)  # validates span and rise
-    return radius, yc, alpha
-
-
-def radial_anchors(
-    angles: Sequence[float],
-    *,
-    span: float,
-    ring_thickness: float,
-    rings: int = 1,
-    kind: str = "semicircular",
-    rise: float | None = None,
-    origin: Sequence[float] = (0.0, 0.0),
-    cover: float = 0.02,
-    diameter: float,
-    **kw,
-) -> list[Anchor]:
-    """Radial anchors through all rings of a circular arch, one per angle.
-
-    Args:
-        angles: polar angles [degrees] of the anchors about the intrados centre (90: the
-            crown; 0/180: the springings of a semicircular arch).
-        span, ring_thickness, rings, kind, rise, origin: the arch, as in
-            :func:`~masonry_fdem.geometry.arch_layout`.
-        cover: distance [m] from the intrados and from the extrados to the anchor ends.
-        diameter: bar diameter [m]; other keywords go to :class:`Anchor`.
-
-    Raises:
-        ValueError: an angle outside the arch, or a cover leaving no anchor.
-    """
-    radius, yc, alpha = _arch_geometry(kind, span, rise)
-    depth = rings * ring_thickness
-    if not 0 <= cover < 0.5 * depth:
-        raise ValueError(f"cover must be in [0, {0.5 * depth:g}) m, got {cover}")
-    lo, hi = 90.0 - math.degrees(alpha), 90.0 + math.degrees(alpha)
-    out = []
-    o = np.asarray(origin, dtype=float)
-    name = kw.pop("name", "radial")
-    for k, ang in enumerate(angles):
-        if not lo - 1e-9 <= ang <= hi + 1e-9:
-            raise ValueError(f"anchor angle {ang} deg is outside the arch ({lo:g}..{hi:g} deg)")
-        th = math.radians(ang)
-        e = np.array([math.cos(th), math.sin(th)])
-        c = o + np.array([0.0, yc])
-        p0 = c + (radius + cover) * e
-        p1 = c + (radius + depth - cover) * e
-        out.append(Anchor(np.array([p0, p1]), diameter, name=f"{name}:{k}", **kw))
-    return out
-
-
-def intrados_stitch(
-    start_angle: float,
-    end_angle: float,
-    *,
-    span: float,
-    depth: float,
-    kind: str = "semicircular",
-    rise: float | None = None,
-    origin: Sequence[float] = (0.0, 0.0),
-    pieces: int | None = None,
-    diameter: float,
-    **kw,
-) -> Anchor:
-    """A curved stitch following the intrados at ``depth`` [m] above it, from
-    ``start_angle`` to ``end_angle`` (polar angles in degrees about the intrados centre,
-    90 = crown). The arc is a polyline of ``pieces`` chords (default one per 5°)."""
-    radius, yc, alpha = _arch_geometry(kind, span, rise)
-    lo, hi = 90.0 - math.degrees(alpha), 90.0 + math.degrees(alpha)
-    for ang in (start_angle, end_angle):
-        if not lo - 1e-9 <= ang <= hi + 1e-9:
-            raise ValueError(f"stitch angle {ang} deg is outside the arch ({lo:g}..{hi:g} deg)")
-    if start_angle == end_angle:
-        raise ValueError("a stitch needs start_angle != end_angle")
-    _positive("stitch depth", depth)
-    if pieces is None:
-        pieces = max(2, math.ceil(abs(end_angle - start_angle) / 5.0))
-    th = np.radians(np.linspace(start_angle, end_angle, pieces + 1))
-    r = radius + depth
-    c = np.asarray(origin, dtype=float) + np.array([0.0, yc])
-    pts = c + r * np.c_[np.cos(th), np.sin(th)]
-    return Anchor(pts, diameter, name=kw.pop("name", "stitch"), **kw)
-
-
-def inclined_anchors(
-    positions: Sequence[float],
-    *,
-    inclination: float = 90.0,
-    length: float | None = None,
-    span: float,
-    ring_thickness: float,
-    rings: int = 1,
-    kind: str = "semicircular",
-    rise: float | None = None,
-    origin: Sequence[float] = (0.0, 0.0),
-    cover: float = 0.02,
-    diameter: float,
-    **kw,
-) -> list[Anchor]:
-    """Straight anchors drilled from the intrados of a circular arch, one per position.
-
-    Each anchor starts ``cover`` [m] above the intrados at the arch position ``s``
-    (0: left springing, 0.5: crown, 1: right springing; proportional to the angle) and
-    runs at ``inclination`` [degrees] to the intrados tangent: 90 is radial, below 90 it
-    leans towards the right springing (s increasing), above 90 towards the left. A
-    shallow anchor crosses the ring interfaces and several radial joints (a stitch).
-
-    Args:
-        positions: s of the entry points, each in [0, 1].
-        inclination: angle [deg] to the intrados tangent, in (0, 180).
-        length: anchor length [m]; default: as far as ``cover`` below the extrados.
-        span, ring_thickness, rings, kind, rise, origin: the arch, as in
-            :func:`~masonry_fdem.geometry.arch_layout`.
-        cover: distance [m] of the start from the intrados and of the end from the
-            extrados.
-        diameter: bar diameter [m]; other keywords go to :class:`Anchor`.
-
-    Raises:
-        ValueError: a position outside the arch, an inclination outside (0, 180), or an
-            anchor that would leave the masonry through the extrados (the message gives
-            the longest length that fits).
-    """
-    radius, yc, alpha = _arch_geometry(kind, span, rise)
-    depth = rings * ring_thickness
-    if not 0 <= cover < 0.5 * depth:
-        raise ValueError(f"cover must be in [0, {0.5 * depth:g}) m, got {cover}")
-    if not 0.0 < inclination < 180.0:
-        raise ValueError(f"inclination must be in (0, 180) degrees, got {inclination}")
-    if length is not None:
-        _positive("anchor length", length)
-    c = np.asarray(origin, dtype=float) + np.array([0.0, yc])
-    name = kw.pop("name", "inclined")
-    r0, r1 = radius + cover, radius + depth - cover
-    beta = math.radians(inclination)
-    out = []
-    for k, s in enumerate(positions):
-        if not -1e-12 <= s <= 1.0 + 1e-12:
-            raise ValueError(f"anchor position s = {s} is outside the arch (0..1)")
-        th = 0.5 * math.pi + alpha - 2.0 * alpha * s
-        e = np.array([math.cos(th), math.sin(th)])
-        t = np.array([math.sin(th), -math.cos(th)])  # towards increasing s
-        u = math.cos(beta) * t + math.sin(beta) * e
-        # |r0 e + L u| = r1:  L^2 + 2 r0 sin(beta) L + r0^2 - r1^2 = 0
-        b = r0 * math.sin(beta)
-        fits = -b + math.sqrt(b * b + r1 * r1 - r0 * r0)
-        ell = fits if length is None else float(length)
-        if ell > fits * (1.0 + 1e-9):
-            raise ValueError(
-                f"anchor at s = {s:g}, {inclination:g} deg, {ell:g} m long leaves the "
-                f"masonry through the extrados: at most {fits:.3f} m fits with "
-                f"{cover:g} m cover")
-        p0 = c + r0 * e
-        out.append(Anchor(np.array([p0, p0 + ell * u]), diameter, name=f"{name}:{k}", **kw))
-    return out
 
 
 def wall_ties(

@@ -25,7 +25,9 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.contact import _kernels as K
+from masonry_fdem.interactions.contact import _kernels as K
+from masonry_fdem.interactions.search import facet_boxes, max_speed, self_pairs
+from masonry_fdem.parallel import exchange_ids
 
 __all__ = ["ContactSettings", "BlockContact", "restitution_damping_ratio"]
 # restitution_damping_ratio is kept for users of a viscous contact damper (disks)
@@ -283,8 +285,7 @@ class BlockContact:
 
         Collective: ghost facets are exchanged between ranks.
         """
-        from masonry_fdem.contact.adt import self_pairs
-        from masonry_fdem.parallel import exchange_ids
+
 
         comm = self.comm
         v = self.model.v if v is None else v
@@ -293,7 +294,7 @@ class BlockContact:
             # local facet boxes at the current positions -> this rank's inflated bbox
             self._build_extended(np.zeros(0, np.int64), [np.zeros(0, np.int64)] * comm.size)
             self._sync(v)
-            K.facet_boxes(self.X, self.u, self.facets, half, self.boxes)
+            facet_boxes(self.X, self.u, self.facets, half, self.boxes)
             nl = self.local_gid.size
             lo = self.boxes[:nl, :2].min(axis=0) if nl else np.full(2, np.inf)
             hi = self.boxes[:nl, 2:].max(axis=0) if nl else np.full(2, -np.inf)
@@ -310,7 +311,7 @@ class BlockContact:
             received = exchange_ids(comm, send)
             self._build_extended(np.concatenate(received), send)
         self._sync(v)
-        K.facet_boxes(self.X, self.u, self.facets, half, self.boxes)
+        facet_boxes(self.X, self.u, self.facets, half, self.boxes)
         nc = self.n_candidates
         pairs = np.asarray(self_pairs(np.ascontiguousarray(self.boxes[:nc]),
                                       self.facet_block[:nc]), dtype=np.int64).reshape(-1, 2)
@@ -369,7 +370,7 @@ class BlockContact:
             v: nodal velocities [m/s] of the coming step (flat, local dofs).
             dt: the coming step [s].
         """
-        step_travel = 2.0 * K.max_speed(v) * dt
+        step_travel = 2.0 * max_speed(v) * dt
         step_travel = self.comm.allreduce(step_travel, op=MPI.MAX)
         if (self.since >= self.settings.rebuild_every
                 or self.travel + step_travel > self.margin):

@@ -8,7 +8,7 @@ Box-intersection search: box B meets the query Q (closed) iff B.min_j <= Q.max_j
 B.max_j >= Q.min_j for every j, i.e. B's point lies in [-inf, Q.max] x [Q.min, +inf];
 subtrees that cannot hold such a point are pruned, every visited item is tested exactly.
 
-Variant (documented in :mod:`masonry_fdem.contact.adt`): besides its bisection region,
+Variant (documented in :mod:`masonry_fdem.interactions.search.adt`): besides its bisection region,
 which is only rebuilt while building, every node keeps the bounding box of the boxes stored
 in its subtree (``sub``). Pruning with it is never weaker than pruning with the 2d-space
 region (the subtree's minima are >= the region's lower bounds, its maxima <= the region's
@@ -23,6 +23,8 @@ that item's index in the caller's box array; ``left``, ``right`` (n,) int64 chil
 
 Only numpy and numba are imported; outputs are allocated by the callers in ``adt.py``.
 """
+
+import math
 
 import numpy as np
 from numba import njit
@@ -428,3 +430,27 @@ def _brute_pairs(cols, group, out_i, out_j):
                         out_j[count] = j
                     count += 1
     return count
+
+
+@njit(cache=True)
+def facet_boxes(X, u, facets, margin, boxes):
+    """Axis-aligned boxes (xmin, ymin, xmax, ymax) [m] of the facets, inflated by margin."""
+    for k in range(facets.shape[0]):
+        a, b = facets[k, 0], facets[k, 1]
+        ax, ay = X[a, 0] + u[2 * a], X[a, 1] + u[2 * a + 1]
+        bx, by = X[b, 0] + u[2 * b], X[b, 1] + u[2 * b + 1]
+        boxes[k, 0] = min(ax, bx) - margin
+        boxes[k, 1] = min(ay, by) - margin
+        boxes[k, 2] = max(ax, bx) + margin
+        boxes[k, 3] = max(ay, by) + margin
+
+
+@njit(cache=True)
+def max_speed(v):
+    """Largest nodal speed [m/s] of a flat (2 n,) velocity array."""
+    best = 0.0
+    for i in range(v.size // 2):
+        s = v[2 * i] * v[2 * i] + v[2 * i + 1] * v[2 * i + 1]
+        if s > best:
+            best = s
+    return math.sqrt(best)

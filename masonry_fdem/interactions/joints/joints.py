@@ -17,7 +17,7 @@ The joint material of a pair of blocks is chosen, first match wins, by
 3. ``materials``: the pair of block material names, in either order.
 
 ``None`` as a joint material means a dry joint: no bond, the facets are left to the
-frictional contact (:class:`~masonry_fdem.contact.BlockContact`).
+frictional contact (:class:`~masonry_fdem.interactions.BlockContact`).
 
 A fully softened joint is Coulomb friction without tension, i.e. frictional contact with
 the joint's stiffness. A segment whose points have all softened (to ``release_ratio`` of
@@ -43,7 +43,7 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.contact import _joint_kernels as JK
+from masonry_fdem.interactions.joints import _kernels as JK
 from masonry_fdem.geometry.blockmesh import unit_name
 
 __all__ = ["JointMaterial", "Joints", "JOINT_STATES"]
@@ -163,7 +163,7 @@ def coincident_facets(x: np.ndarray, facets: np.ndarray, facet_block: np.ndarray
         (k, 4) float array: facet a, facet b (a < b), overlap start and end as
         arclengths [m] along a.
     """
-    from masonry_fdem.contact.adt import self_pairs
+    from masonry_fdem.interactions.search.adt import self_pairs
 
     p0 = x[facets[:, 0]]
     p1 = x[facets[:, 1]]
@@ -201,7 +201,7 @@ class Joints:
             ``{("brick", "brick"): mortar, ("brick", "base"): mortar}``; None: dry.
         cracks: crack law per material of fractured units (pieces of one unit).
         where: ``[(predicate(midpoint) -> bool, material or None), ...]``, checked first.
-        contact: the :class:`~masonry_fdem.contact.BlockContact` that takes over broken
+        contact: the :class:`~masonry_fdem.interactions.BlockContact` that takes over broken
             joints (and must ignore bonded ones); may be None.
         tolerance: distance [m] within which facets coincide (default 1e-6 of the mean
             boundary facet length).

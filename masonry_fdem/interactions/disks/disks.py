@@ -7,7 +7,7 @@ out-of-plane thickness w [m] of the model. Disks are advanced by the same centra
 step as the blocks (:class:`~masonry_fdem.solvers.ExplicitSolver` with ``disks=``).
 
 Disk–disk contact is Hertz–Mindlin–Coulomb with hysteretic restitution and optional rolling
-resistance (:mod:`masonry_fdem.contact._disk_kernels`, where the 2D law is stated and
+resistance (:mod:`masonry_fdem.interactions.disks._kernels`, where the 2D law is stated and
 justified). Candidate pairs come from a cell list (disks are nearly monodisperse within a
 factor of a few, which a uniform grid serves best), rebuilt when a disk has moved by half
 the margin since the last rebuild; the tangential and rolling histories of persisting
@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 
 from masonry_fdem.constants import G
-from masonry_fdem.contact import _disk_kernels as DK
+from masonry_fdem.interactions.disks import _kernels as DK
 
 __all__ = ["DiskMaterial", "Disks"]
 
@@ -87,17 +87,6 @@ class DiskMaterial:
         out[DK.P_E], out[DK.P_NU], out[DK.P_MU] = self.E, self.nu, self.friction
         out[DK.P_REST], out[DK.P_MU_ROLL] = self.restitution, self.rolling_friction
         return out
-
-
-@njit(cache=True)
-def _max_move(x, x_ref):
-    """Largest distance [m] of a disk from its position at the last rebuild."""
-    m2 = 0.0
-    for i in range(x.shape[0]):
-        dx = x[i, 0] - x_ref[i, 0]
-        dy = x[i, 1] - x_ref[i, 1]
-        m2 = max(m2, dx * dx + dy * dy)
-    return math.sqrt(m2)
 
 
 @njit(cache=True)
@@ -292,7 +281,7 @@ class Disks:
     def compute_forces(self, dt: float) -> None:
         """Gravity and disk–disk contact forces at the current positions into f, torque
         (block couplings add theirs afterwards)."""
-        if _max_move(self.x, self._x_ref) > 0.5 * self.margin:
+        if DK.max_move(self.x, self._x_ref) > 0.5 * self.margin:
             self._rebuild()
         _gravity(self.f, self.torque, self.m, self.g)
         DK.disk_disk_forces(self.x, self.v, self.omega, self.r, self.mat, self.table,

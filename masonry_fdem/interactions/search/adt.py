@@ -41,7 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from masonry_fdem.contact import _adt_kernels as K
+from masonry_fdem.interactions.search import _kernels as K
 
 __all__ = ["ADTree", "brute_force_pairs", "build_adt", "inflate", "query_adt", "self_pairs"]
 

@@ -475,3 +475,26 @@ def disk_pairs_cell_list(x, r, margin):
         if sweep == 0:
             out = np.empty((offs[n], 2), dtype=np.int64)
     return out
+
+
+@njit(cache=True)
+def max_move(x, x_ref):
+    """Largest distance [m] of a disk from its position at the last rebuild."""
+    m2 = 0.0
+    for i in range(x.shape[0]):
+        dx = x[i, 0] - x_ref[i, 0]
+        dy = x[i, 1] - x_ref[i, 1]
+        m2 = max(m2, dx * dx + dy * dy)
+    return math.sqrt(m2)
+
+
+@njit(cache=True)
+def max_node_move(X, u, u_ref, nodes):
+    """Largest displacement [m] of the given block nodes since ``u_ref``."""
+    m2 = 0.0
+    for k in range(nodes.size):
+        i = nodes[k]
+        dx = u[2 * i] - u_ref[2 * i]
+        dy = u[2 * i + 1] - u_ref[2 * i + 1]
+        m2 = max(m2, dx * dx + dy * dy)
+    return math.sqrt(m2)

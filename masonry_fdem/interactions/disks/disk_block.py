@@ -2,7 +2,7 @@
 paper's Figure 4: one normal force from the disk's overlap with the block, split among
 the touching facets by overlap area, P_n,i = P_n A_i/A, each part directed through the
 centroid of its overlap area; Coulomb friction with an incremental spring; the reactions
-distributed to the facet nodes (:mod:`masonry_fdem.contact._disk_facet_kernels`).
+distributed to the facet nodes (:mod:`masonry_fdem.interactions.disks._facet_kernels`).
 
 Candidate (disk, facet) pairs come from the alternating digital tree of the local facets'
 boxes queried with the disks' boxes, both inflated by a travel margin; they are found
@@ -22,29 +22,19 @@ from mpi4py import MPI
 import numpy as np
 from numba import njit
 
-from masonry_fdem.contact import _disk_facet_kernels as DF
-from masonry_fdem.contact import _kernels as C
-from masonry_fdem.contact.adt import build_adt, query_adt
+from masonry_fdem.interactions.disks import _facet_kernels as DF
+from masonry_fdem.interactions.disks import _kernels as DK
+from masonry_fdem.interactions.search import facet_boxes
+from masonry_fdem.interactions.search.adt import build_adt, query_adt
 
 __all__ = ["DiskBlockContact"]
-
-
-@njit(cache=True)
-def _max_node_move(X, u, u_ref, nodes):
-    m2 = 0.0
-    for k in range(nodes.size):
-        i = nodes[k]
-        dx = u[2 * i] - u_ref[2 * i]
-        dy = u[2 * i + 1] - u_ref[2 * i + 1]
-        m2 = max(m2, dx * dx + dy * dy)
-    return math.sqrt(m2)
 
 
 class DiskBlockContact:
     """Disk–block contact (see the module docstring).
 
     Args:
-        disks: the :class:`~masonry_fdem.disks.Disks` set (registered with it).
+        disks: the :class:`~masonry_fdem.interactions.disks.Disks` set (registered with it).
         model: the :class:`~masonry_fdem.model.Model` of the blocks.
         friction: Coulomb coefficient μ between disks and blocks (default: the disks').
         stiffness: penalty factor: the contact's tangent stiffness per unit thickness is
@@ -152,7 +142,7 @@ class DiskBlockContact:
             qi = np.zeros(0, dtype=np.int64)
             it = np.zeros(0, dtype=np.int64)
         else:
-            C.facet_boxes(self.X, u, self.facets, self.margin, self.boxes)
+            facet_boxes(self.X, u, self.facets, self.margin, self.boxes)
             tree = build_adt(self.boxes)
             rr = d.r + self.margin
             qboxes = np.c_[d.x[:, 0] - rr, d.x[:, 1] - rr, d.x[:, 0] + rr, d.x[:, 1] + rr]
@@ -196,12 +186,10 @@ class DiskBlockContact:
     def add_forces(self, f, v, dt) -> None:
         """Add the contact forces on the block nodes to ``f`` (flat, local dofs) and on the
         disks to ``disks.f`` and ``disks.torque`` (summed over ranks)."""
-        from masonry_fdem.disks import _max_move
-
         d = self.disks
         u = self.model.u.x.array
-        if (self._fresh or _max_move(d.x, self.x_ref) > 0.5 * self.margin
-                or _max_node_move(self.X, u, self.u_ref, self.nodes) > 0.5 * self.margin):
+        if (self._fresh or DK.max_move(d.x, self.x_ref) > 0.5 * self.margin
+                or DK.max_node_move(self.X, u, self.u_ref, self.nodes) > 0.5 * self.margin):
             self._rebuild()
             self._fresh = False
         self.f_disk.fill(0.0)

@@ -283,26 +283,3 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, h
     energy[0] = e_n
     energy[1] = e_t
     energy[2] = d_f
-
-
-@njit(cache=True)
-def facet_boxes(X, u, facets, margin, boxes):
-    """Axis-aligned boxes (xmin, ymin, xmax, ymax) [m] of the facets, inflated by margin."""
-    for k in range(facets.shape[0]):
-        ax, ay = _pos(X, u, facets[k, 0])
-        bx, by = _pos(X, u, facets[k, 1])
-        boxes[k, 0] = min(ax, bx) - margin
-        boxes[k, 1] = min(ay, by) - margin
-        boxes[k, 2] = max(ax, bx) + margin
-        boxes[k, 3] = max(ay, by) + margin
-
-
-@njit(cache=True)
-def max_speed(v):
-    """Largest nodal speed [m/s] of a flat (2 n,) velocity array."""
-    best = 0.0
-    for i in range(v.size // 2):
-        s = v[2 * i] * v[2 * i] + v[2 * i + 1] * v[2 * i + 1]
-        if s > best:
-            best = s
-    return math.sqrt(best)

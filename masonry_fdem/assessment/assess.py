@@ -1,14 +1,14 @@
 """Remnant strength of a masonry arch: load to collapse, hinge sequence, limit analysis.
 
-:func:`assess` runs one :class:`~masonry_fdem.case.ArchCase` (``masonry-fdem assess
+:func:`assess` runs one :class:`~masonry_fdem.assessment.case.ArchCase` (``masonry-fdem assess
 CASE.toml`` on the command line):
 
 1. the rigid-block limit analysis of the same blocks (linear programming, seconds): the
    collapse load LimitState:RING-style tools give, reported beside the FDEM result;
 2. the FDEM model: deformable voussoirs and abutments (the abutments fixed), mortar and
-   ring interfaces as :class:`~masonry_fdem.contact.Joints` (a joint without tensile
+   ring interfaces as :class:`~masonry_fdem.interactions.Joints` (a joint without tensile
    strength or cohesion in the case file is a dry joint, left to the frictional
-   :class:`~masonry_fdem.contact.BlockContact`), anchors if any; self-weight first;
+   :class:`~masonry_fdem.interactions.BlockContact`), anchors if any; self-weight first;
 3. load to collapse by dynamic relaxation (velocity-quotient damping, see
    :mod:`masonry_fdem.solvers.dynamic_relaxation`):
 
@@ -50,7 +50,7 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.case import (
+from masonry_fdem.assessment.case import (
     ArchCase,
     CaseError,
     LoadControl,
@@ -153,11 +153,11 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     Returns:
         ``(model, interactions, anchors)``: the :class:`~masonry_fdem.model.Model` (its
         abutments fixed, self-weight as a dead load), ``[BlockContact, Joints]`` and the
-        :class:`~masonry_fdem.anchors.Anchors` (None without anchors).
+        :class:`~masonry_fdem.interactions.anchors.Anchors` (None without anchors).
     """
     from masonry_fdem import Model
-    from masonry_fdem.anchors import Anchors
-    from masonry_fdem.contact import BlockContact, ContactSettings, Joints
+    from masonry_fdem.interactions.anchors import Anchors
+    from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
 
     layout = case.mesh_layout()
     mesh = layout.mesh(case.arch.mesh_size, comm)
@@ -183,7 +183,7 @@ class _JointMonitor:
     """Openings of the radial joints at their two ends (collective)."""
 
     def __init__(self, case: ArchCase, model):
-        from masonry_fdem.limit_analysis import find_interfaces
+        from masonry_fdem.solvers.limit_analysis import find_interfaces
 
         layout = case.layout()
         itf = find_interfaces(layout)
@@ -287,7 +287,7 @@ def assess(
     """Load an arch case to collapse and report it (collective; see the module doc).
 
     Args:
-        case: an :class:`~masonry_fdem.case.ArchCase`, a TOML file or a dict of one.
+        case: an :class:`~masonry_fdem.assessment.case.ArchCase`, a TOML file or a dict of one.
         out: the run folder (default: the case's ``analysis.output``).
         overwrite: allow a run folder that exists and is not empty.
         progress: draw a progress bar on stderr (default: when stderr is a terminal).
@@ -345,7 +345,7 @@ def assess(
     state: dict[str, Any] = {"open": [], "anchors": []}
 
     # load-line displacement: mean vertical displacement of the nodes nearest the points
-    load_nodes = [model._nearest_node(p, "voussoir:*") for p in points]
+    load_nodes = [model.nearest_node(p, "voussoir:*") for p in points]
     u_sw = _mean_uy(model, load_nodes)
 
     def record(load: float, iterations: int) -> None:
@@ -458,7 +458,7 @@ def anchor_state(anchors) -> list[dict]:
     ``distance`` [m] of the bar nodes from the anchor's start, ``force`` [N per bar] of
     each bar element (tension positive), ``slip`` [m] at each node, ``force_max`` [N],
     ``slip_max`` [m], ``yield_force`` [N], ``yielded`` and ``ruptured`` element counts."""
-    from masonry_fdem import _anchor_kernels as AK
+    from masonry_fdem.interactions.anchors import _kernels as AK
 
     nodes = anchors.node_results()
     force = anchors.axial_force()

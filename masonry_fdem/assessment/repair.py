@@ -5,8 +5,8 @@ writes one report: both load–displacement curves on one plot, both mechanisms,
 anchors' bar forces and bond slips at collapse (``masonry-fdem repair CASE.toml``).
 
 :func:`search` looks for a near-optimal anchor layout over the candidate space of the
-case's ``[search]`` table (:class:`~masonry_fdem.case.SearchSpec`): straight anchors
-drilled from the intrados (:func:`~masonry_fdem.anchors.inclined_anchors`) at
+case's ``[search]`` table (:class:`~masonry_fdem.assessment.case.SearchSpec`): straight anchors
+drilled from the intrados (:func:`~masonry_fdem.assessment.layouts.inclined_anchors`) at
 ``count`` of the ``positions``, each ``inclination``, ``length`` and ``prestress``.
 
 * **Checks first.** A layout whose anchor leaves the structure (through the extrados,
@@ -55,8 +55,8 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.assess import Assessment, assess, move_into
-from masonry_fdem.case import (
+from masonry_fdem.assessment.assess import Assessment, assess, move_into
+from masonry_fdem.assessment.case import (
     AnchorLayout,
     ArchCase,
     CaseError,
@@ -78,7 +78,7 @@ class Comparison:
     """Result of :func:`compare` (loads [N], lengths [m]).
 
     Attributes:
-        unstrengthened, anchored: the two :class:`~masonry_fdem.assess.Assessment`.
+        unstrengthened, anchored: the two :class:`~masonry_fdem.assessment.assess.Assessment`.
         gain: anchored / unstrengthened collapse load − 1.
         anchor_length: Σ bars × length of the anchors [m].
         folder, report: the run folder and its ``report.md`` (None if not written).
@@ -128,7 +128,7 @@ def compare(
     """Assess a case without and with its ``[[anchors]]`` (collective).
 
     Args:
-        case: an :class:`~masonry_fdem.case.ArchCase` with anchors, a TOML file or a dict.
+        case: an :class:`~masonry_fdem.assessment.case.ArchCase` with anchors, a TOML file or a dict.
         out: the run folder (default: the case's ``analysis.output``); it gets
             ``report.md``, ``curves.png``, ``anchors.png``, ``summary.json`` and the two
             assessment folders ``unstrengthened/`` and ``anchored/``.
@@ -293,7 +293,7 @@ class RankedLayout:
 
     Attributes:
         rank: 1 for the best.
-        layout: the :class:`~masonry_fdem.case.AnchorLayout`.
+        layout: the :class:`~masonry_fdem.assessment.case.AnchorLayout`.
         collapse_load: its collapse load at the fine level (under ``cheapest``: capped at
             the target).
         gain: collapse load − the unstrengthened collapse load.
@@ -769,6 +769,6 @@ def _write_search(case: ArchCase, spec: SearchSpec, res: SearchResult, folder: P
 
 
 def layouts_of(positions: Sequence[float], **kw: Any) -> list[AnchorLayout]:
-    """One single-anchor :class:`~masonry_fdem.case.AnchorLayout` per position (kw: as
+    """One single-anchor :class:`~masonry_fdem.assessment.case.AnchorLayout` per position (kw: as
     AnchorLayout); a helper for hand-made candidate sets."""
     return [AnchorLayout((float(p),), **kw) for p in positions]

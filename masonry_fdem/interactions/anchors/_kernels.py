@@ -1,6 +1,6 @@
 """Numba kernels of the embedded anchors (flat arrays, no allocation per call).
 
-Conventions (see :mod:`masonry_fdem.anchors`): anchor node ``i`` has displacement
+Conventions (see :mod:`masonry_fdem.interactions.anchors`): anchor node ``i`` has displacement
 ``ua[2i:2i+2]`` [m] and reference position ``xa[i]``; bar element ``e`` joins nodes
 ``conn[e, 0] → conn[e, 1]``. Forces are accumulated (``+=``) into the output arrays.
 

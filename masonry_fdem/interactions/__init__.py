@@ -1,0 +1,46 @@
+"""Everything that acts between blocks, disks and anchors, behind one protocol.
+
+Layers inside this package (lower ones never import higher ones): ``protocol`` and
+``search`` (ADT broad phase) → ``contact`` (facet–facet) → ``joints`` → ``disks`` →
+``anchors``. Every provider is an :class:`~masonry_fdem.interactions.protocol.Interaction`;
+the solvers call nothing else.
+"""
+
+from masonry_fdem.interactions.anchors import (
+    Anchor,
+    Anchors,
+    BondLaw,
+    DowelLaw,
+    SteelLaw,
+    straight_anchor,
+    wall_ties,
+)
+from masonry_fdem.interactions.contact import (
+    BlockContact,
+    ContactSettings,
+    restitution_damping_ratio,
+)
+from masonry_fdem.interactions.disks import (
+    DiskBlockContact,
+    DiskMaterial,
+    Disks,
+    pack_disks,
+    spatial_order,
+)
+from masonry_fdem.interactions.joints import JOINT_STATES, JointMaterial, Joints
+from masonry_fdem.interactions.search import (
+    ADTree,
+    brute_force_pairs,
+    build_adt,
+    inflate,
+    query_adt,
+    self_pairs,
+)
+
+__all__ = [
+    "ADTree", "Anchor", "Anchors", "BlockContact", "BondLaw", "ContactSettings",
+    "DiskBlockContact", "DiskMaterial", "Disks", "DowelLaw", "JOINT_STATES", "JointMaterial",
+    "Joints", "SteelLaw", "brute_force_pairs", "build_adt", "inflate", "pack_disks",
+    "query_adt", "restitution_damping_ratio", "self_pairs", "spatial_order",
+    "straight_anchor", "wall_ties",
+]

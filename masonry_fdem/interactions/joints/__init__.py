@@ -1,0 +1,5 @@
+"""Bonded mortar joints and unit cracks: a zero-thickness cohesive interface law."""
+
+from masonry_fdem.interactions.joints.joints import JOINT_STATES, JointMaterial, Joints
+
+__all__ = ["JOINT_STATES", "JointMaterial", "Joints"]
