@@ -84,7 +84,7 @@ def main() -> None:
     t0 = time.perf_counter()
     if args.control == "load":
         model.add_point_load(point, direction)
-    dr = DynamicRelaxation(model, contact=contact, rtol=args.rtol, ke_tol=math.inf,
+    dr = DynamicRelaxation(model, interactions=contact, rtol=args.rtol, ke_tol=math.inf,
                            max_iter=args.max_iter, damping=args.damping)
     assert dr.solve(0.0).converged
     if args.control == "displacement":  # the platen touches the arch after self-weight
@@ -95,7 +95,7 @@ def main() -> None:
         model.prescribe_nodes(lambda X: np.hypot(X[0] - x0[0], X[1] - x0[1]) < 1e-9, comps,
                               "drive")
         load_nodes = 1 if direction[0] == 0 else 0
-        dr = DynamicRelaxation(model, contact=contact, rtol=args.rtol, ke_tol=math.inf,
+        dr = DynamicRelaxation(model, interactions=contact, rtol=args.rtol, ke_tol=math.inf,
                                max_iter=args.max_iter, damping=args.damping)
     if args.control == "load":
         res = dr.load_to_collapse(0.1 * p_la, refinements=args.refinements)

@@ -152,7 +152,7 @@ def packing(n_target: int, seed: int = 1, shuffle: bool = False) -> Packing:
     max_overlap = 1.5 * delta.max() / r.min()
     probe = Disks([[0.0, 0.0], [1.0, 0.0]], [r.min()] * 2, {"gravel": MAT}, "gravel",
                   width=WIDTH, max_overlap=max_overlap, comm=MPI.COMM_SELF)
-    dt = SAFETY * 2.0 / math.sqrt(probe.stable_omega2())
+    dt = SAFETY * 2.0 / math.sqrt(probe.stable_omega2()["disks"])
     v = rng.normal(0.0, TRAVEL * R0 / dt / math.sqrt(2.0), x.shape)
     omega = rng.normal(0.0, 0.5 * TRAVEL / dt, r.size)
     v[fixed] = 0.0

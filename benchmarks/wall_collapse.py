@@ -45,7 +45,7 @@ def main():
     model.v[0::2] = np.where(top[model.node_block], 1.0, 0.0)  # a push at the top [m/s]
     contact = BlockContact(model, ContactSettings(friction=0.6, restitution=0.5,
                                                   rebuild_every=args.rebuild_every))
-    solver = ExplicitSolver(model, contact=contact, damping=1.0)
+    solver = ExplicitSolver(model, interactions=contact, damping=1.0)
     t_search = [0.0]
     rebuild = contact.rebuild
 

@@ -79,14 +79,14 @@ def push(model, joints, contact, size, *, precompression=0.30e6, d_max=3e-3,
     model.add_gravity(live=False)
     model.add_pressure(lambda x: np.isclose(x[1], height + 0.1) & (x[0] > -1e-9)
                        & (x[0] < width + 1e-9), precompression, live=False)
-    dr = DynamicRelaxation(model, contact=[contact, joints], rtol=1e-6)
+    dr = DynamicRelaxation(model, interactions=[contact, joints], rtol=1e-6)
     res = dr.solve(1.0)
     if not res.converged:
         raise RuntimeError("the precompressed wall found no equilibrium")
     t_r = 0.1 * t_load
     v0 = d_max / (t_load - 0.5 * t_r)
     model.prescribe_velocity("beam", lambda t: (v0 * min(t / t_r, 1.0), None), name="beam")
-    solver = ExplicitSolver(model, contact=[contact, joints], damping=50.0)
+    solver = ExplicitSolver(model, interactions=[contact, joints], damping=50.0)
     disp, load = [0.0], [0.0]
 
     def record(s):

@@ -76,7 +76,7 @@ def main() -> None:
     DiskBlockContact(disks, model, damping_ratio=0.3)
     gate = model.prescribe_velocity("gate", lambda t: (0.0, 0.0), name="gate")
     # 1. settle on the closed gate (damped)
-    s = ExplicitSolver(model, disks=disks, damping=10.0)
+    s = ExplicitSolver(model, interactions=disks, damping=10.0)
     s.run(t_end=0.25, every=2000)
     # 2. open: the gate slides aside at 2 m/s; flow undamped
     t_open = s.t

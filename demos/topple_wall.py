@@ -60,7 +60,7 @@ top = blocks.block_centroid[:, 1] > 0.6 * args.courses * H
 model.v[0::2] = np.where(top[model.node_block], args.push, 0.0)
 model.monitor("top", (width, args.courses * H))
 contact = BlockContact(model, ContactSettings(friction=0.6, restitution=0.3))
-solver = ExplicitSolver(model, contact=contact, damping=2.0)
+solver = ExplicitSolver(model, interactions=contact, damping=2.0)
 
 # ## Run, recording the energy account
 

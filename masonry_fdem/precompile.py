@@ -115,7 +115,7 @@ def precompile() -> None:
                          prm, np.zeros((1, DF.N_HIST)), 1e-3, np.zeros(8), np.zeros((1, 2)),
                          np.zeros(1), np.zeros(DF.N_WORK), np.zeros((1, DF.N_OUT)),
                          np.zeros((4, DF.N_PART)))
-    DK.max_node_move(X, uu, uu, np.arange(4, dtype=np.int64))
+    DK.max_node_move(uu, uu, np.arange(4, dtype=np.int64))
     from masonry_fdem.interactions.disks.packing import pack_disks
 
     pack_disks(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), 0.1, 0.15, 0.5)

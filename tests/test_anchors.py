@@ -27,6 +27,7 @@ from masonry_fdem.interactions.anchors import (
 from masonry_fdem.assessment.layouts import intrados_stitch, radial_anchors
 from masonry_fdem.geometry import BlockMesh
 from masonry_fdem.solvers import DynamicRelaxation, ExplicitSolver
+from masonry_fdem.interactions.protocol import BLOCKS, State
 
 RIGID_STEEL = SteelLaw(E=2e14, yield_stress=1e13, rupture_strain=1.0)
 BRICK = Material(density=2000.0, E=5e9, nu=0.2)
@@ -63,7 +64,7 @@ def test_pull_out_of_a_short_anchor_follows_the_bond_law(bond):
                                      steel=RIGID_STEEL)])
     assert np.count_nonzero(anchors.bonded_element) * 0.02 == pytest.approx(L)
     anchors.prescribe("pull", 0, "end")
-    dr = DynamicRelaxation(model, anchors=anchors, rtol=1e-9)
+    dr = DynamicRelaxation(model, interactions=anchors, rtol=1e-9)
     peak = math.pi * d * L * bond.strength
     worst = 0.0
     for s in [5e-5, 1e-4, 2e-4, 4e-4, 1e-3, 1.5e-3, 2e-3, 2.5e-3, 3e-3, 4e-3]:
@@ -99,7 +100,7 @@ def test_long_elastic_anchor_matches_the_shear_lag_solution():
                     steel=steel, segment=0.05)
     anchors = Anchors(model, [anchor])
     anchors.prescribe("pull", 0, "end")
-    dr = DynamicRelaxation(model, anchors=anchors, rtol=1e-6)
+    dr = DynamicRelaxation(model, interactions=anchors, rtol=1e-6)
     assert dr.solve(0.0, displacement={"pull": (1e-3, 0.0)}).converged
     P = dr.reactions()["pull"][0]
     p = math.pi * d
@@ -130,7 +131,7 @@ def two_blocks_across_a_dry_joint(anchor_kw, comm=MPI.COMM_SELF):
     contact = BlockContact(model, ContactSettings(friction=0.6))
     anchors = Anchors(model, [Anchor([[0.11, 0.1], [0.49, 0.1]], diameter=0.012,
                                      segment=0.02, **anchor_kw)])
-    dr = DynamicRelaxation(model, contact=contact, anchors=anchors, rtol=1e-8)
+    dr = DynamicRelaxation(model, interactions=[contact, anchors], rtol=1e-8)
     return model, anchors, dr
 
 
@@ -229,12 +230,13 @@ def test_prestressed_anchor_puts_the_blocks_in_compression():
     P = 20e3
     anchors = Anchors(model, [Anchor([[0.02, 0.1], [0.58, 0.1]], diameter=0.012,
                                      prestress=P, plates="both", segment=0.02)])
-    dr = DynamicRelaxation(model, contact=contact, anchors=anchors, rtol=1e-8)
+    dr = DynamicRelaxation(model, interactions=[contact, anchors], rtol=1e-8)
     b_dofs = 2 * model._block_nodes("block:1")
 
     def joint_compression():
         f = np.zeros_like(model.f_int)
-        contact.add_forces(f, np.zeros_like(f), 1.0, damping=False)
+        contact.add_forces(State({BLOCKS: model.u.x.array}, {BLOCKS: np.zeros_like(f)},
+                                 {BLOCKS: f}, 1.0, False))
         return comm.allreduce(float(f[b_dofs].sum()))  # contact force of A on B along x
 
     assert dr.solve(0.0).converged
@@ -269,13 +271,13 @@ def _tied_pier(comm):
     tie = wall_ties([0.21], extent=(-0.08, 0.58), diameter=0.016, steel=steel, bond=bond,
                     dowel=DowelLaw(stiffness=2e9, strength=2e5), segment=0.05)
     anchors = Anchors(model, tie)
-    dr = DynamicRelaxation(model, contact=contact, anchors=anchors, rtol=1e-7)
+    dr = DynamicRelaxation(model, interactions=[contact, anchors], rtol=1e-7)
     out = []
     for lf in (0.5, 1.0):
         assert dr.solve(lf).converged
         out.append((model.displacement().copy(), anchors.axial_force().copy(),
                     anchors.node_results()["slip"].copy(), dr.reactions()["base"].copy()))
-    ex = ExplicitSolver(model, contact=contact, anchors=anchors, damping=20.0)
+    ex = ExplicitSolver(model, interactions=[contact, anchors], damping=20.0)
     ex.run(steps=300)
     out.append((model.displacement().copy(), anchors.axial_force().copy(),
                 anchors.node_results()["slip"].copy(), ex.reactions()["base"].copy()))
@@ -318,7 +320,7 @@ def test_explicit_pull_out_follows_the_quasi_static_curve():
     advanced with the blocks."""
     model, anchors = _pull_model()
     anchors.prescribe("pull", 0, "end")
-    dr = DynamicRelaxation(model, anchors=anchors, rtol=1e-8)
+    dr = DynamicRelaxation(model, interactions=anchors, rtol=1e-8)
     marks = [1e-4, 3e-4, 6e-4]
     static = []
     for s in marks:
@@ -326,7 +328,7 @@ def test_explicit_pull_out_follows_the_quasi_static_curve():
         static.append(dr.reactions()["pull"][0])
     model2, anchors2 = _pull_model()
     anchors2.prescribe("pull", 0, "end", velocity=(5e-3, 0.0))
-    ex = ExplicitSolver(model2, anchors=anchors2, damping=200.0)
+    ex = ExplicitSolver(model2, interactions=anchors2, damping=200.0)
     dynamic = []
     for s in marks:
         ex.run(t_end=s / 5e-3)
@@ -346,7 +348,7 @@ def test_anchor_output_history_and_picture(tmp_path):
 
     model, anchors = _pull_model(MPI.COMM_WORLD)
     anchors.prescribe("pull", 0, "end")
-    dr = DynamicRelaxation(model, anchors=anchors, rtol=1e-8)
+    dr = DynamicRelaxation(model, interactions=anchors, rtol=1e-8)
     folder = tmp_path if MPI.COMM_WORLD.size == 1 else None
     folder = MPI.COMM_WORLD.bcast(folder if folder is not None else tmp_path, root=0)
     out = AnchorOutput(anchors, folder / "vtk")

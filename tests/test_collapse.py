@@ -36,7 +36,8 @@ def test_rocking_block_collapses_at_the_overturning_load():
     model.add_gravity()
     model.add_point_load((0.0, 1.0), (1.0, 0.0))
     contact = BlockContact(model, ContactSettings(friction=10.0))
-    dr = DynamicRelaxation(model, contact=contact, rtol=1e-6, ke_tol=math.inf, max_iter=40_000)
+    dr = DynamicRelaxation(model, interactions=contact, rtol=1e-6, ke_tol=math.inf,
+                           max_iter=40_000)
     assert dr.solve(0.0).converged
     res = dr.load_to_collapse(0.2 * exact, refinements=4)
     print(f"\nrocking block: collapse {res.load_factor:.2f} N (+{res.resolution:.2f}) against "

@@ -13,6 +13,7 @@ from masonry_fdem.constants import G
 from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.geometry import mesh_blocks
 from masonry_fdem.solvers import DynamicRelaxation, ExplicitSolver
+from masonry_fdem.interactions.protocol import BLOCKS, State
 
 # contact models run on one rank for now (cross-rank contact is not implemented yet)
 comm = MPI.COMM_SELF
@@ -50,7 +51,7 @@ def test_flat_impact_restitution(e):
     model.v[2 * nodes + 1] = -1.0
     contact = BlockContact(model, ContactSettings(restitution=e, friction=0.0,
                                                   penalty_factor=0.01))
-    solver = ExplicitSolver(model, contact=contact)
+    solver = ExplicitSolver(model, interactions=contact)
     solver.run(t_end=0.06)
     v = _block_velocity(model, 1)
     print(f"e = {e}: rebound ratio {v[1]:.4f}")
@@ -90,7 +91,7 @@ def test_corner_impact_restitution(e):
     corner = nodes[np.argmin(model.X[nodes, 1])]
     contact = BlockContact(model, ContactSettings(restitution=e, friction=0.0,
                                                   penalty_factor=0.2))
-    solver = ExplicitSolver(model, contact=contact)
+    solver = ExplicitSolver(model, interactions=contact)
     solver.run(t_end=0.1)
     tip = model.X[corner] + model.u.x.array[2 * corner : 2 * corner + 2]
     ratio = -_rigid_velocity(model, 1, tip)[1] / -1.0
@@ -107,7 +108,7 @@ def test_bouncing_with_restitution_one_gains_no_energy(theta):
     model.add_gravity()
     contact = BlockContact(model, ContactSettings(restitution=1.0, friction=0.3,
                                                   penalty_factor=0.01))
-    solver = ExplicitSolver(model, contact=contact)
+    solver = ExplicitSolver(model, interactions=contact)
     nodes = np.flatnonzero(model.node_block == 1)
     mass = model.mass[2 * nodes].sum()
     drop = mass * G * 0.02  # the energy the block starts with above the floor [J]
@@ -147,7 +148,7 @@ def _incline(theta, mu, mesh_size=None, restitution=0.2):
 def test_block_on_incline_sticks_below_friction_angle():
     theta, mu = math.radians(20.0), 0.5  # tan 20° = 0.36 < 0.5
     model, contact = _incline(theta, mu)
-    solver = ExplicitSolver(model, contact=contact, damping=50.0)  # settles the springs
+    solver = ExplicitSolver(model, interactions=contact, damping=50.0)  # settles the springs
     solver.run(t_end=0.5)
     u_half = model.displacement()[model.blocks.node_offsets[1]].copy()
     solver.run(t_end=1.0)
@@ -160,7 +161,7 @@ def test_block_on_incline_sticks_below_friction_angle():
 def test_block_on_incline_slides_with_coulomb_acceleration():
     theta, mu = math.radians(30.0), 0.3  # tan 30° = 0.58 > 0.3
     model, contact = _incline(theta, mu, restitution=1.0)
-    solver = ExplicitSolver(model, contact=contact)
+    solver = ExplicitSolver(model, interactions=contact)
     t = (math.cos(theta), math.sin(theta))
 
     def along():
@@ -186,7 +187,7 @@ def test_column_of_ten_blocks_reaction_equals_weight():
     model.fix_blocks("base")
     model.add_gravity((0.0, -G), live=True)
     contact = BlockContact(model, ContactSettings(friction=0.6))
-    dr = DynamicRelaxation(model, contact=contact, rtol=1e-7)
+    dr = DynamicRelaxation(model, interactions=contact, rtol=1e-7)
     res = dr.solve(1.0)
     weight = (1800.0 * 10 * 0.3 * 0.1 + 2000.0 * 1.0 * 0.2) * G  # bricks + the base itself
     reaction = dr.reactions()["fixed:base"]
@@ -209,7 +210,7 @@ def test_patch_non_matching_meshes_uniform_pressure():
     contact = BlockContact(model, ContactSettings(friction=0.0, penalty_factor=10.0))
     # frictionless: hold the upper block's rigid horizontal mode at one node
     model.fix(lambda X: (X[1] > 1.0 - 1e-9) & (X[0] < 1e-9), components=(0,), name="pin2")
-    dr = DynamicRelaxation(model, contact=contact, rtol=1e-9)
+    dr = DynamicRelaxation(model, interactions=contact, rtol=1e-9)
     assert dr.solve(1.0).converged
     model.update_stress()
     sig = model.stress.x.array.reshape(-1, 4)
@@ -219,7 +220,8 @@ def test_patch_non_matching_meshes_uniform_pressure():
     assert np.all(np.abs(syy + p) <= 0.02 * p)
     # contact pressure: vertical contact force on the lower block's top nodes per length
     f = np.zeros_like(model.f_int)
-    contact.add_forces(f, np.zeros_like(f), 1.0, damping=False)
+    contact.add_forces(State({BLOCKS: model.u.x.array}, {BLOCKS: np.zeros_like(f)},
+                                 {BLOCKS: f}, 1.0, False))
     top = np.flatnonzero((model.node_block == 0) & np.isclose(model.X[:, 1], 0.5))
     x = model.X[top, 0]
     order = np.argsort(x)
@@ -248,7 +250,7 @@ def test_neighbour_rebuild_every_k_steps_misses_no_contact():
         model.v[0::2] = np.where(model.node_block > 0, 0.5 * np.sin(model.node_block), 0.0)
         contact = BlockContact(model, ContactSettings(friction=0.4, restitution=0.5,
                                                       penalty_factor=0.01, rebuild_every=k))
-        return model, contact, ExplicitSolver(model, contact=contact)
+        return model, contact, ExplicitSolver(model, interactions=contact)
 
     (ma, ca, sa), (mb, cb, sb) = scene(20), scene(1)
     mismatches = 0
@@ -290,7 +292,7 @@ def test_contact_same_on_any_rank_count():
         model = _tower(c)
         contact = BlockContact(model, ContactSettings(friction=0.5, restitution=0.5,
                                                       penalty_factor=0.02))
-        solver = ExplicitSolver(model, contact=contact)
+        solver = ExplicitSolver(model, interactions=contact)
         solver.run(steps=1500)
         runs.append((model.displacement(), contact.active_pairs(), solver.energies()))
     (uw, pw, ew), (us, ps, es) = runs
@@ -337,7 +339,7 @@ def test_voussoir_arch_settles_by_dynamic_relaxation():
     model.fix_blocks("abutment:*", name="abutments")
     model.add_gravity(live=True)
     contact = BlockContact(model, ContactSettings(friction=0.6))
-    dr = DynamicRelaxation(model, contact=contact, rtol=1e-6, max_iter=20_000)
+    dr = DynamicRelaxation(model, interactions=contact, rtol=1e-6, max_iter=20_000)
     results = dr.load_steps([0.5, 1.0])
     print("arch DR iterations:", [r.iterations for r in results])
     assert [r.converged for r in results] == [True, True]

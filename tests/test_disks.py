@@ -41,8 +41,8 @@ def head_on(e: float, v0: float = 1.0):
     model = far_block()
     t_c = 3.21807 * (0.5 * disks.m[0] / DK.hertz_k(disks.table[0, 0, DK.T_ESTAR], R, R, W))**0.4 \
         * (2 * v0) ** -0.2
-    s = ExplicitSolver(model, dt=min(t_c / 400, 0.9 * 2 / math.sqrt(disks.stable_omega2())),
-                       disks=disks)
+    dt = min(t_c / 400, 0.9 * 2 / math.sqrt(disks.stable_omega2()["disks"]))
+    s = ExplicitSolver(model, dt=dt, interactions=disks)
     touching, t_in, t_out = False, None, None
     for _ in range(200_000):
         s.step()
@@ -137,8 +137,8 @@ def test_disk_on_a_deformable_block_by_dynamic_relaxation():
     disks = Disks([[0.083, 0.05 + 0.999 * R]], [R], {"g": DiskMaterial(**GRAVEL)}, "g",
                   width=W)
     disks.add_gravity()
-    DiskBlockContact(disks, model)
-    dr = DynamicRelaxation(model, disks=disks, rtol=1e-6)
+    coupling = DiskBlockContact(disks, model)
+    dr = DynamicRelaxation(model, interactions=[disks, coupling], rtol=1e-6)
     res = dr.solve(1.0)
     ry = dr.reactions()["base"][1]
     print(f"\ndisk on a block by dynamic relaxation: {res.iterations} iterations; base "
@@ -156,8 +156,8 @@ def test_disk_resting_on_a_deformable_block_loads_it_with_its_weight():
     model.fix(lambda X: np.isclose(X[1], 0.0), name="base")
     disks = Disks([[0.083, 0.05 + R]], [R], {"g": DiskMaterial(**GRAVEL)}, "g", width=W)
     disks.add_gravity()
-    DiskBlockContact(disks, model, damping_ratio=0.3)
-    s = ExplicitSolver(model, disks=disks, damping=30.0)
+    coupling = DiskBlockContact(disks, model, damping_ratio=0.3)
+    s = ExplicitSolver(model, interactions=[disks, coupling], damping=30.0)
     s.run(t_end=0.3, every=1000)
     ry = s.reactions()["base"][1]
     print(f"\ndisk on a deformable block: base reaction {ry:.6f} N, disk weight "
@@ -182,8 +182,8 @@ def test_settled_column_base_carries_the_weight():
     disks = Disks(x, r, {"g": DiskMaterial(**GRAVEL, restitution=0.3)}, "g", width=W,
                   comm=comm)
     disks.add_gravity()
-    DiskBlockContact(disks, model, friction=0.0, damping_ratio=0.5)
-    s = ExplicitSolver(model, disks=disks, damping=20.0)
+    coupling = DiskBlockContact(disks, model, friction=0.0, damping_ratio=0.5)
+    s = ExplicitSolver(model, interactions=[disks, coupling], damping=20.0)
     s.run(t_end=0.6, every=2000)
     rb = s.reactions()["base"]
     rw = s.reactions()["walls"]
@@ -211,8 +211,8 @@ def _column(comm, t_end):
     disks = Disks(x, r, {"g": DiskMaterial(**GRAVEL, restitution=0.3)}, "g", width=W,
                   comm=comm)
     disks.add_gravity()
-    DiskBlockContact(disks, model, damping_ratio=0.2)
-    s = ExplicitSolver(model, disks=disks, damping=5.0)
+    coupling = DiskBlockContact(disks, model, damping_ratio=0.2)
+    s = ExplicitSolver(model, interactions=[disks, coupling], damping=5.0)
     s.run(t_end=t_end, every=1000)
     return disks.x.copy(), model.displacement(), s.reactions()["base"]
 

@@ -44,7 +44,7 @@ def bend(h: float, d_max: float = 3e-4, t_load: float = 0.03):
     model.prescribe_nodes(on(0.5 * L, D), lambda t: (None, -v0 * min(t / t_r, 1.0)),
                           name="knife")
     omega1 = 2 * np.pi * 780.0  # first bending mode, Euler–Bernoulli estimate [rad/s]
-    solver = ExplicitSolver(model, contact=joints, damping=0.1 * omega1)
+    solver = ExplicitSolver(model, interactions=joints, damping=0.1 * omega1)
     load, disp = [], []
 
     def record(s):

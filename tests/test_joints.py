@@ -36,7 +36,7 @@ def two_blocks(joint: JointMaterial, *, nu=0.0, comm=MPI.COMM_WORLD):
 
 def drive(model, joints, path, component, name="platen"):
     """Displacement-controlled DR along ``path`` [m]; returns (δ, reaction) arrays."""
-    dr = DynamicRelaxation(model, contact=joints, rtol=1e-8, max_iter=100_000)
+    dr = DynamicRelaxation(model, interactions=joints, rtol=1e-8, max_iter=100_000)
     assert dr.solve(0.0).converged
     d_out, f_out = [0.0], [0.0]
     for d in path:
@@ -143,7 +143,7 @@ def test_bonded_wall_at_rest_stays_intact():
     joints = Joints(model, {("brick", "brick"): mortar, ("brick", "base"): mortar})
     model.fix_blocks("base", name="base")
     model.add_gravity()
-    dr = DynamicRelaxation(model, contact=joints, rtol=1e-7)
+    dr = DynamicRelaxation(model, interactions=joints, rtol=1e-7)
     res = dr.solve(1.0)
     assert res.converged
     counts = joints.counts()
@@ -193,7 +193,7 @@ def test_broken_open_joint_is_handed_to_contact_without_a_force_jump():
     joints = Joints(model, {("brick", "brick"): jm}, contact=contact, check_every=1)
     model.fix_blocks("block:0", name="base")
     model.fix(lambda X: np.isclose(X[1], 2 * H), name="platen")
-    dr = DynamicRelaxation(model, contact=[contact, joints], rtol=1e-8, max_iter=100_000)
+    dr = DynamicRelaxation(model, interactions=[contact, joints], rtol=1e-8, max_iter=100_000)
     decay = jm.GfI / jm.ft
     forces, handed = [], None
     for k, d in enumerate(np.r_[np.linspace(1e-6, 12 * decay, 120)]):

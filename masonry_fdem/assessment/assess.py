@@ -147,6 +147,11 @@ class Assessment:
 
 
 # ---------------------------------------------------------------------------- the model
+
+def _with(interactions: list, anchors) -> list:
+    """The solver's interactions: contact and joints, then the anchors if any."""
+    return interactions if anchors is None else [*interactions, anchors]
+
 def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     """The FDEM model of a case (collective).
 
@@ -325,7 +330,7 @@ def assess(
                       force=bool(progress)) if progress is not False else None
     scale = limit_load or ld.max_load or 20 * ld.increment
 
-    dr = DynamicRelaxation(model, contact=inter, anchors=anchors, rtol=an.dr_rtol,
+    dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
                            ke_tol=math.inf, max_iter=an.max_iterations, damping="velocity")
     res = dr.solve(0.0)
     if res.converged and anchors is not None and any(a.prestress > 0 for a in anchors.anchors):
@@ -401,7 +406,7 @@ def assess(
         _prescribe_node_ids(model, {g for part in ids for g in part}, "platen")
         lf = collapse if ld.control is LoadControl.LOAD else 0.0
         # the live load stays as it was; the platen's reaction adds to it
-        dr = DynamicRelaxation(model, contact=inter, anchors=anchors, rtol=an.dr_rtol,
+        dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
                                ke_tol=math.inf, max_iter=an.max_iterations,
                                damping="velocity")
         peak, k_peak, falling = collapse, len(loads) - 1, 0

@@ -9,6 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from masonry_fdem.checks import check_positive
 from masonry_fdem.geometry.arches import arch_circle
 from masonry_fdem.interactions.anchors import Anchor
 
@@ -84,7 +85,7 @@ def intrados_stitch(
             raise ValueError(f"stitch angle {ang} deg is outside the arch ({lo:g}..{hi:g} deg)")
     if start_angle == end_angle:
         raise ValueError("a stitch needs start_angle != end_angle")
-    _positive("stitch depth", depth)
+    check_positive("stitch depth", depth)
     if pieces is None:
         pieces = max(2, math.ceil(abs(end_angle - start_angle) / 5.0))
     th = np.radians(np.linspace(start_angle, end_angle, pieces + 1))
@@ -139,7 +140,7 @@ def inclined_anchors(
     if not 0.0 < inclination < 180.0:
         raise ValueError(f"inclination must be in (0, 180) degrees, got {inclination}")
     if length is not None:
-        _positive("anchor length", length)
+        check_positive("anchor length", length)
     c = np.asarray(origin, dtype=float) + np.array([0.0, yc])
     name = kw.pop("name", "inclined")
     r0, r1 = radius + cover, radius + depth - cover

@@ -42,8 +42,7 @@ class DiskOutput:
         name = f"disks_{len(self.steps):05d}.vtp"
         pts = np.c_[d.x, np.zeros(d.n)]
         vel = np.c_[d.v, np.zeros(d.n)]
-        grav = d.m[:, None] * d.g[None, :]
-        fc = np.c_[d.f - grav, np.zeros(d.n)]  # contact (and coupling) forces at the step
+        fc = np.c_[d.f, np.zeros(d.n)]  # contact (and coupling) forces at the step
         offsets = np.arange(1, d.n + 1, dtype="<i8")
         conn = np.arange(d.n, dtype="<i8")
 

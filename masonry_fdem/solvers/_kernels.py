@@ -20,8 +20,10 @@ N_ENERGY = 6
 
 @njit(cache=True)
 def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, damping, dt,
-                            reaction, energy):
-    """One central-difference step with lumped mass and mass-proportional damping.
+                            reaction, energy, du):
+    """One central-difference step with lumped mass and mass-proportional damping: the
+    one integrator of every dof set (block nodes, disk centres and rotations, anchor bar
+    nodes; for a rotation read torque for force and inertia for mass).
 
     On entry ``v`` holds v(n-1/2) and ``u`` holds u(n); on exit v(n+1/2) and u(n+1).
     ``f_int``, ``f_ext``, ``f_con`` are the internal, applied and contact forces at u(n)
@@ -30,6 +32,8 @@ def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, da
     ``energy`` (N_ENERGY,) accumulates the energy account; with the half-step kinetic
     energy and midpoint work increments the discrete balance
     K + W_int + W_damp − W_ext − W_support − W_contact = K(0) holds to round-off.
+    ``du`` receives the midpoint displacement increment (v(n−½) + v(n+½)) dt/2 of each dof,
+    over which any force's work in the step is ``f · du``.
     """
     a1 = 1.0 - 0.5 * damping * dt
     a2 = 1.0 / (1.0 + 0.5 * damping * dt)
@@ -51,6 +55,7 @@ def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, da
         else:
             vn = (a1 * vo + dt * g * minv[i]) * a2
         vb = 0.5 * (vo + vn) * dt
+        du[i] = vb
         w_int += f_int[i] * vb
         w_ext += f_ext[i] * vb
         w_con += f_con[i] * vb

@@ -24,8 +24,16 @@ Methods for Transient Analysis*, pp. 245–265):
 * convergence when the out-of-balance force norm over the free dofs falls below
   ``rtol · |f_ext|`` and the fictitious kinetic energy below ``ke_tol`` times its peak.
 
+Every dof set moves by the same update: the block nodes, and the sets the interactions
+bring (disk centres and rotations, anchor bar nodes), each with fictitious masses from
+the row sums of its stiffness (the interactions' ``add_rowsum``). The replicated sets
+(held whole on every rank) enter the residual and the displacement quotient; the
+velocity quotient is taken over the block dofs, which carry the structure's lowest mode.
+
 Load increments scale the live loads; an increment that does not converge within
 ``max_iter`` iterations is reported as not in equilibrium (collapse in a load-to-collapse run).
+History (material state of the blocks, every interaction's) is committed only when an
+increment converges; a failed increment is undone by :meth:`DynamicRelaxation.restore`.
 """
 
 from __future__ import annotations
@@ -37,8 +45,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
-from masonry_fdem.solvers._interactions import as_interactions
+from masonry_fdem.solvers._setup import as_interactions, owned_dofsets
 
 __all__ = ["DynamicRelaxation", "DRResult"]
 
@@ -86,6 +95,22 @@ class CollapseResult:
     history: list[float]
 
 
+class _Set:
+    """Dynamic relaxation's arrays of one dof set: the unknowns ``u`` (the owner's), the
+    fictitious velocity and masses, the force accumulator ``f`` handed to the
+    interactions and the resisting force ``res`` (internal minus interaction forces)."""
+
+    def __init__(self, name, u, f, f_ext, mfict, presc, replicated, prescriptions, res):
+        self.name, self.u, self.f, self.f_ext = name, u, f, f_ext
+        self.m, self.presc, self.replicated = mfict, presc, replicated
+        self.prescriptions = prescriptions
+        self.res = res
+        self.v = np.zeros_like(u)
+        self.u0 = np.zeros_like(u)
+        self.res0 = np.zeros_like(u)
+        self.sums = np.zeros(4)
+
+
 class DynamicRelaxation:
     """Adaptive dynamic relaxation of a :class:`~masonry_fdem.model.Model`.
 
@@ -95,20 +120,13 @@ class DynamicRelaxation:
         ke_tol: fictitious kinetic energy tolerance relative to its peak in the increment.
         max_iter: iteration limit per load increment.
         mass_safety: α in the fictitious mass bound (≥ 1).
-        contact: a :class:`~masonry_fdem.interactions.BlockContact`, the bonded
-            :class:`~masonry_fdem.interactions.Joints`, a sequence of them, or None. Their
-            springs enter the fictitious masses; their forces (without restitution damping)
-            enter the residual; friction slips by the fictitious displacement increments.
-            Joint states are trial states computed from the last converged increment and
-            committed only when an increment converges. So is the material state of the
-            blocks (damage, plastic strain): committed only at a converged increment.
-        disks: a :class:`~masonry_fdem.interactions.disks.Disks` set with its block couplings: the disk
-            positions and rotations join the unknowns, with fictitious masses from the
-            bound of their contact stiffness (the disks' friction histories follow the
-            iteration; they are not rolled back).
-        anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors` of the model: their bar nodes
-            join the unknowns, with fictitious masses from their stiffness row sums; their
-            bond and steel states are committed at converged increments only.
+        interactions: one :class:`~masonry_fdem.interactions.protocol.Interaction` or a
+            sequence of them (contact, joints, disks, disk–block contact, anchors, a
+            user's), or None. Their row sums enter the fictitious masses; their forces
+            (without velocity-dependent damping) enter the residual; friction slips by the
+            fictitious displacement increments; the dof sets they own (disks, anchor bar
+            nodes) join the unknowns. Their states, and the material state of the blocks
+            (damage, plastic strain), are committed only when an increment converges.
         damping: "displacement" (Underwood: the Rayleigh quotient of the displacement
             since the start of the increment) or "velocity" (of the last velocity; see
             the module doc). The blocks' dofs only enter the velocity quotient.
@@ -122,9 +140,7 @@ class DynamicRelaxation:
         ke_tol: float = 1e-10,
         max_iter: int = 200_000,
         mass_safety: float = 1.1,
-        contact=None,
-        disks=None,
-        anchors=None,
+        interactions: Interaction | Sequence[Interaction] | None = None,
         damping: str = "displacement",
     ):
         if damping not in ("displacement", "velocity"):
@@ -139,50 +155,34 @@ class DynamicRelaxation:
         self.ke_tol = float(ke_tol)
         self.max_iter = int(max_iter)
         self.dt = 1.0
+        self.interactions = as_interactions(interactions)
+        owned = owned_dofsets(self.interactions)
         _, rowsum = model.element_bounds()
-        self.contact = contact
-        self.interactions = as_interactions(contact)
-        self.anchors = anchors
-        if anchors is not None:
-            self.interactions.append(anchors)
-            a = anchors
-            self.am = mass_safety * 0.25 * self.dt**2 * a.rowsum
-            self.au0 = np.zeros_like(a.u)
-            self.av = np.zeros_like(a.u)
-            self.af = np.zeros_like(a.u)
-            self.af0 = np.zeros_like(a.u)
-            self.afext = np.zeros_like(a.u)
-            self._asums = np.zeros(4)
+        rows = {BLOCKS: rowsum.copy(), **{n: np.zeros(ds.u.size) for n, ds in owned.items()}}
         for c in self.interactions:
-            rowsum = rowsum + c.stiffness_rowsum()
-        self.mfict = mass_safety * 0.25 * self.dt**2 * rowsum
-        if np.any(self.mfict <= 0):
-            raise ValueError("a dof has no stiffness: is a node not attached to any element?")
+            c.add_rowsum(rows)
+        scale = mass_safety * 0.25 * self.dt**2
+        for name, r in rows.items():
+            if np.any(scale * r <= 0):
+                raise ValueError(f"a dof of {name!r} has no stiffness: is a node not attached "
+                                 "to any element?")
         self.presc, _ = model.prescribed_arrays(0.0)
-        self.v = np.zeros_like(model.f_int)
-        self.f_int0 = np.zeros_like(model.f_int)
-        self._fprev = np.zeros_like(model.f_int)
         self.f_ext = np.zeros_like(model.f_int)
-        self.f_net = np.zeros_like(model.f_int)  # f_int − f_contact
-        self._sums = np.zeros(6)
-        self._vsums = self._sums[4:]  # the velocity quotient's parts
+        self.f_net = np.zeros_like(model.f_int)  # −f_int + f_interactions, then negated
+        self.mfict = scale * rows[BLOCKS]
+        blocks = _Set(BLOCKS, model.u.x.array, self.f_net, self.f_ext, self.mfict, self.presc,
+                      False, {}, self.f_net)
+        self.sets = [blocks] + [
+            _Set(n, ds.u, ds.f, ds.f_ext, scale * rows[n], ds.presc, ds.replicated,
+                 ds.prescriptions, np.zeros_like(ds.u)) for n, ds in owned.items()]
+        self.v = blocks.v
+        self._fprev = np.zeros_like(model.f_int)
+        self._sums = np.zeros(6)  # the blocks' measures, then the velocity quotient's parts
+        blocks.sums = self._sums[:4]
+        self._vsums = self._sums[4:]
+        self._state = State({s.name: s.u for s in self.sets}, {s.name: s.v for s in self.sets},
+                            {s.name: s.f for s in self.sets}, self.dt, False)
         self.results: list[DRResult] = []
-        self.disks = disks
-        if disks is not None:
-            n = disks.n
-            w2 = disks.stable_omega2() + sum(c.stable_omega2() for c in disks.couplings)
-            k_bound = w2 * float(disks.m.min())  # the stiffest spring a disk can feel
-            self.dm = np.empty(3 * n)
-            self.dm.reshape(-1, 3)[:, :2] = (mass_safety * 0.25 * self.dt**2 * k_bound)
-            self.dm.reshape(-1, 3)[:, 2] = self.dm[0] * disks.r**2
-            self.dq = np.zeros(3 * n)
-            self.dq0 = np.zeros(3 * n)
-            self.dv = np.zeros(3 * n)
-            self.df = np.zeros(3 * n)
-            self.df0 = np.zeros(3 * n)
-            self.dfext = np.zeros(3 * n)
-            self.dpresc = np.repeat(disks.fixed, 3).astype(np.int8)
-            self._dsums = np.zeros(4)
 
     def solve(
         self,
@@ -195,8 +195,9 @@ class DynamicRelaxation:
         Args:
             load_factor: factor on the live loads.
             displacement: displacement control: ``{prescription name: (ux, uy)}`` [m]
-                sets the prescribed dofs of that prescription (a loading platen) to these
-                total displacements (``None``: leave that component as it is).
+                sets the prescribed dofs of that prescription (a loading platen, or a
+                prescribed anchor node) to these total displacements (``None``: leave that
+                component as it is).
             dt: the physical duration of the increment [s] seen by rate-dependent
                 (Perzyna) laws; None: infinitely slow loading (the rate-independent limit).
         """
@@ -206,23 +207,16 @@ class DynamicRelaxation:
         if displacement:
             self.prescribe(displacement)
         m.external_force(load_factor, out=self.f_ext)
+        blocks, others = self.sets[0], self.sets[1:]
         free = self.presc == 0
         ref2 = comm.allreduce(float(np.dot(self.f_ext[free], self.f_ext[free])))
-        if self.disks is not None:  # the disks' weights are applied loads too
-            dw = self.disks.m[self.disks.fixed == 0]
-            ref2 += float(np.dot(dw, dw)) * float(np.dot(self.disks.g, self.disks.g))
-        u = m.u.x.array
-        u0 = u.copy()
+        for s in others:  # replicated: counted once
+            fe = s.f_ext[s.presc == 0]
+            ref2 += float(np.dot(fe, fe))
+        for s in self.sets:
+            s.u0[:] = s.u
+            s.v[:] = 0.0
         by_velocity = self.damping == "velocity"
-        self.v[:] = 0.0
-        d = self.disks
-        if d is not None:
-            self._pack_disks(self.dq0)
-            self.dv[:] = 0.0
-        an = self.anchors
-        if an is not None:
-            self.au0[:] = an.u
-            self.av[:] = 0.0
         ke_peak = 0.0
         c = 0.0
         r_norm = math.inf
@@ -230,43 +224,31 @@ class DynamicRelaxation:
         it = 0
         converged = False
         for it in range(1, self.max_iter + 1):
-            f_net = self._resisting_force()
-            if it == 1:
-                self.f_int0[:] = f_net
+            self._resisting_force()
+            first = it == 1
+            if first:
+                for s in self.sets:
+                    s.res0[:] = s.res
                 if ref == 0.0:
-                    ref2 = comm.allreduce(float(np.dot(f_net, f_net)))
-                    if an is not None:  # replicated: counted once
-                        ref2 += float(np.dot(an.f, an.f))
+                    ref2 = comm.allreduce(float(np.dot(blocks.res, blocks.res)))
+                    for s in others:
+                        ref2 += float(np.dot(s.res, s.res))
                     ref = math.sqrt(ref2) or 1.0
-            K.dr_measure(u, u0, self.v, f_net, self.f_int0, self.f_ext, self.mfict,
-                         self.presc, self._sums)
+            K.dr_measure(blocks.u, blocks.u0, blocks.v, blocks.res, blocks.res0, blocks.f_ext,
+                         blocks.m, blocks.presc, blocks.sums)
             if by_velocity:
-                K.dr_velocity_quotient(self.v, f_net, self._fprev, self.mfict, self.presc,
-                                       it == 1, self._vsums)
+                K.dr_velocity_quotient(blocks.v, blocks.res, self._fprev, blocks.m,
+                                       blocks.presc, first, self._vsums)
             r2, num, den, ke, num_v, den_v = comm.allreduce(self._sums)
             if by_velocity:
                 num, den = num_v, den_v
-            if d is not None:  # every rank holds every disk: add their share once
-                if it == 1:
-                    self.df0[:] = self.df
-                K.dr_measure(self.dq, self.dq0, self.dv, self.df, self.df0, self.dfext,
-                             self.dm, self.dpresc, self._dsums)
-                r2 += self._dsums[0]
+            for s in others:  # every rank holds them whole: added once
+                K.dr_measure(s.u, s.u0, s.v, s.res, s.res0, s.f_ext, s.m, s.presc, s.sums)
+                r2 += s.sums[0]
                 if not by_velocity:
-                    num += self._dsums[1]
-                    den += self._dsums[2]
-                ke += self._dsums[3]
-            if an is not None:
-                np.negative(an.f, out=self.af)
-                if it == 1:
-                    self.af0[:] = self.af
-                K.dr_measure(an.u, self.au0, self.av, self.af, self.af0, self.afext,
-                             self.am, an.presc, self._asums)
-                r2 += self._asums[0]
-                if not by_velocity:
-                    num += self._asums[1]
-                    den += self._asums[2]
-                ke += self._asums[3]
+                    num += s.sums[1]
+                    den += s.sums[2]
+                ke += s.sums[3]
             r_norm = math.sqrt(r2)
             ke_peak = max(ke_peak, ke)
             # a residual far below the tolerance is equilibrium even where the kinetic
@@ -284,20 +266,10 @@ class DynamicRelaxation:
             # else keep the last estimate: a non-positive quotient (contact opening,
             # friction slip) says nothing of the lowest frequency, and c = 0 would leave
             # the iteration undamped
-            K.dr_update(u, self.v, f_net, self.f_ext, self.mfict, self.presc, c, self.dt,
-                        it == 1)
-            if d is not None:
-                K.dr_update(self.dq, self.dv, self.df, self.dfext, self.dm, self.dpresc, c,
-                            self.dt, it == 1)
-                self._unpack_disks()
-            if an is not None:
-                K.dr_update(an.u, self.av, self.af, self.afext, self.am, an.presc, c,
-                            self.dt, it == 1)
+            for s in self.sets:
+                K.dr_update(s.u, s.v, s.res, s.f_ext, s.m, s.presc, c, self.dt, first)
         if converged:
-            m.commit_state()
-            for c in self.interactions:
-                if hasattr(c, "commit"):
-                    c.commit()
+            self.commit()
         res = DRResult(float(load_factor), converged, it, r_norm, ref)
         self.results.append(res)
         if comm.rank == 0:
@@ -308,95 +280,61 @@ class DynamicRelaxation:
             )
         return res
 
+    def commit(self) -> None:
+        """Accept the current state: the blocks' material state and every interaction's."""
+        self.model.commit_state()
+        for c in self.interactions:
+            c.commit()
+
     def prescribe(self, displacement: Mapping[str, Sequence[float | None]]) -> None:
         """Set prescribed dofs to total displacements [m] (see :meth:`solve`)."""
         by_name = {p.name: p for p in self.model.prescriptions}
         u = self.model.u.x.array
-        an = self.anchors
         for name, val in displacement.items():
-            if an is not None and name in an.prescriptions:
-                an.set_displacement(name, val)
-                continue
-            if name not in by_name:
-                raise ValueError(f"no prescription named {name!r}; have {sorted(by_name)}")
             if len(val) != 2:
                 raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
+            owner = next((s for s in self.sets[1:] if name in s.prescriptions), None)
+            if owner is not None:
+                dofs = owner.prescriptions[name]
+                for comp in (0, 1):
+                    if val[comp] is not None:
+                        owner.u[dofs[comp]] = float(val[comp])
+                continue
+            if name not in by_name:
+                names = sorted([*by_name, *(n for s in self.sets for n in s.prescriptions)])
+                raise ValueError(f"no prescription named {name!r}; have {names}")
             p = by_name[name]
             for comp in (0, 1):
                 if val[comp] is not None:
                     sel = p.components == comp
                     u[p.dofs[sel]] = float(val[comp])
 
-    def _pack_disks(self, q) -> None:
-        d = self.disks
-        q3 = q.reshape(-1, 3)
-        q3[:, :2] = d.x
-        q3[:, 2] = d.theta
-
-    def _unpack_disks(self) -> None:
-        d = self.disks
-        q3 = self.dq.reshape(-1, 3)
-        d.x[:] = q3[:, :2]
-        d.theta[:] = q3[:, 2]
-        v3 = self.dv.reshape(-1, 3)
-        d.v[:] = v3[:, :2]  # displacement increments per iteration (dt = 1)
-        d.omega[:] = v3[:, 2]
-
-    def _resisting_force(self) -> np.ndarray:
-        """f_int(u) − f_contact(u) [N]: what the applied loads must balance. With disks,
-        also their resisting forces −(f, torque) into ``self.df`` (gravity included)."""
+    def _resisting_force(self) -> None:
+        """Into ``res`` of every set: f_int(u) − f_interactions(u) [N], what the applied
+        loads must balance (the interactions see the fictitious velocities)."""
         m = self.model
         m.internal_force(m.f_int)
-        d = self.disks
-        if not self.interactions and (d is None or not d.couplings):
-            out = m.f_int
-        else:
-            np.negative(m.f_int, out=self.f_net)
-            for c in self.interactions:
-                c.update_neighbours(self.v, self.dt)
-                c.add_forces(self.f_net, self.v, self.dt, damping=False)
-            out = self.f_net
-        if d is not None:
-            d.compute_forces(self.dt)
-            for c in d.couplings:
-                if out is m.f_int:
-                    raise RuntimeError("unreachable")
-                c.add_forces(self.f_net, self.v, self.dt)
-            df3 = self.df.reshape(-1, 3)
-            np.negative(d.f, out=df3[:, :2])
-            np.negative(d.torque, out=df3[:, 2])
-            self._pack_disks(self.dq)
-        if out is self.f_net:
-            np.negative(self.f_net, out=self.f_net)
-        return out
+        np.negative(m.f_int, out=self.f_net)
+        for s in self.sets[1:]:
+            s.f.fill(0.0)
+        for c in self.interactions:
+            c.update(self._state)
+            c.add_forces(self._state)
+        np.negative(self.f_net, out=self.f_net)
+        for s in self.sets[1:]:
+            np.negative(s.f, out=s.res)
 
-    def snapshot(self) -> dict:
-        """The state a non-converged increment may have spoiled: displacements, the
-        contact friction history, the anchors' bar nodes (committed material, joint and
-        bond states are untouched by an increment that does not converge)."""
-        snap = {"u": self.model.u.x.array.copy()}
-        for k, c in enumerate(self.interactions):
-            if all(hasattr(c, a) for a in ("keys", "tau", "pmax", "rebuild")):
-                snap[("contact", k)] = (c.keys.copy(), c.tau.copy(), c.pmax.copy())
-        if self.anchors is not None:
-            snap["anchors"] = self.anchors.u.copy()
-        if self.disks is not None:
-            d = self.disks
-            snap["disks"] = (d.x.copy(), d.theta.copy())
-        return snap
+    def snapshot(self) -> dict[str, np.ndarray]:
+        """The unknowns of every dof set (copies), for :meth:`restore`."""
+        return {s.name: s.u.copy() for s in self.sets}
 
-    def restore(self, snap: dict) -> None:
-        """Go back to a :meth:`snapshot` (collective: contact neighbour lists are rebuilt)."""
-        self.model.u.x.array[:] = snap["u"]
-        for k, c in enumerate(self.interactions):
-            key = ("contact", k)
-            if key in snap:
-                c.keys, c.tau, c.pmax = (a.copy() for a in snap[key])
-                c.rebuild(np.zeros_like(self.model.v))
-        if self.anchors is not None:
-            self.anchors.u[:] = snap["anchors"]
-        if self.disks is not None:
-            self.disks.x[:], self.disks.theta[:] = (a.copy() for a in snap["disks"])
+    def restore(self, snap: Mapping[str, np.ndarray]) -> None:
+        """Back to a :meth:`snapshot` and to every interaction's committed state
+        (collective: contact neighbour lists are rebuilt)."""
+        for s in self.sets:
+            s.u[:] = snap[s.name]
+        for c in self.interactions:
+            c.restore()
 
     def load_to_collapse(
         self,
@@ -465,14 +403,16 @@ class DynamicRelaxation:
         return out
 
     def reactions(self) -> dict[str, np.ndarray]:
-        """Reaction (Rx, Ry) [N] of each prescription: f_int − f_ext at its dofs."""
+        """Reaction (Rx, Ry) [N] of each prescription: f_int − f_ext at its dofs (for an
+        anchor node's, the force its prescription applies)."""
         m = self.model
-        f_net = self._resisting_force()
+        self._resisting_force()
         out = {}
         for p in m.prescriptions:
             r = np.zeros(2)
-            np.add.at(r, p.components, f_net[p.dofs] - self.f_ext[p.dofs])
+            np.add.at(r, p.components, self.f_net[p.dofs] - self.f_ext[p.dofs])
             out[p.name] = m.comm.allreduce(r)
-        if self.anchors is not None:
-            out.update(self.anchors.reactions())
+        for s in self.sets[1:]:
+            for name, dofs in s.prescriptions.items():
+                out[name] = s.res[dofs] - s.f_ext[dofs]
         return out

@@ -1,29 +1,33 @@
 """Explicit central-difference time integration with lumped mass.
 
-One step (DESIGN.md): internal forces from the dolfinx form at ``u(n)``, external loads,
-then one numba kernel updates velocities and displacements, overwrites prescribed dofs,
-computes support reactions and accumulates the energy account. Nothing is allocated in
-the step.
+One step: internal forces from the dolfinx form at ``u(n)``, the forces of every
+interaction (through the protocol of :mod:`masonry_fdem.interactions.protocol`), external
+loads, then one numba kernel — the same for every dof set: block nodes, disk centres and
+rotations, anchor bar nodes — updates velocities and displacements, overwrites
+prescribed dofs, computes support reactions and accumulates the energy account. Nothing
+is allocated in the step.
 
-The time step is ``safety · 2/ω_max`` with ω_max bounded by the largest element eigenvalue
-of the linear stiffness with lumped mass; it is reported, and a user time step above the
-critical one is refused.
+The time step is ``safety · 2/ω_max``, ω_max bounded for the blocks by the largest
+element eigenvalue of the linear stiffness with lumped mass plus the bounds the
+interactions add, and for every other dof set by the bounds of the interactions acting
+on it; it is reported, and a user time step above the critical one is refused.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 from mpi4py import MPI
 
 import numpy as np
 
 from masonry_fdem.constants import DT_SAFETY
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
-from masonry_fdem.solvers._interactions import as_interactions
+from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, summed_omega2
 
 __all__ = ["ExplicitSolver", "EnergyAccount", "UnstableTimeStepError"]
 
@@ -36,13 +40,17 @@ class UnstableTimeStepError(ValueError):
 
 @dataclass(frozen=True)
 class EnergyAccount:
-    """Energies [J] since the start of the run (global over ranks).
+    """Energies [J] since the start of the run, over every dof set (block nodes, disks,
+    anchor bars) and global over ranks.
 
     ``balance`` = kinetic + internal + damping − external − support − contact − initial
     kinetic, zero up to round-off for the central-difference identity; ``internal`` is the
-    work done against the internal forces, i.e. the strain energy for an elastic body;
-    ``contact`` is the work done BY the contact forces (minus the stored penalty energy and
-    the frictional and contact-damping dissipation).
+    work done against the blocks' internal forces, i.e. the strain energy for an elastic
+    body; ``contact`` is the work done BY the forces of all interactions. ``interactions``
+    holds, per interaction name, its own :meth:`energies` (``stored`` and ``dissipated``)
+    and ``work``, the work its forces did; ``unaccounted`` = contact + Σ (stored +
+    dissipated) is the work no interaction reports as stored or dissipated (zero up to
+    the time discretisation when every one accounts for its energy).
     """
 
     kinetic: float
@@ -52,24 +60,41 @@ class EnergyAccount:
     support: float
     contact: float
     balance: float
+    interactions: dict[str, dict[str, float]] = field(default_factory=dict)
+    unaccounted: float = 0.0
+
+
+class _Set:
+    """The explicit solver's arrays of one dof set (views of the owner's state)."""
+
+    def __init__(self, name, u, v, f_int, f_ext, f_con, mass, presc, vp, reaction,
+                 replicated, prescriptions):
+        self.name = name
+        self.u, self.v, self.f_int, self.f_ext, self.f_con = u, v, f_int, f_ext, f_con
+        self.mass = mass
+        self.minv = 1.0 / mass
+        self.presc, self.vp, self.reaction = presc, vp, reaction
+        self.replicated = replicated
+        self.prescriptions = prescriptions
+        self.energy = np.zeros(K.N_ENERGY)
+        self.du = np.zeros_like(u)
 
 
 class ExplicitSolver:
-    """Central-difference integrator of a :class:`~masonry_fdem.model.Model`.
+    """Central-difference integrator of a :class:`~masonry_fdem.model.Model` and the dof
+    sets its interactions bring (disks, anchor bars).
 
     Args:
         model: the model to advance (its ``u`` and ``v`` are the state).
         dt: time step [s]; by default ``safety`` times the critical step.
         safety: fraction of the critical step used when ``dt`` is None.
-        damping: mass-proportional damping coefficient α [1/s] (f_damp = α M v).
+        damping: mass-proportional damping coefficient α [1/s] (f_damp = α M v), on every
+            dof set.
         load_factor: factor on the live loads (constant, or a function of time).
-        contact: a :class:`~masonry_fdem.interactions.BlockContact`, the bonded
-            :class:`~masonry_fdem.interactions.Joints`, a sequence of them, or None (blocks do not
-            interact). Their springs are included in the stable time step.
-        disks: a :class:`~masonry_fdem.interactions.disks.Disks` set (granular fill) advanced by the same
-            step, with its couplings to the blocks; its contact springs bound the step too.
-        anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors` of the model (repairs): their
-            bar nodes are advanced by the same step; their springs bound the step.
+        interactions: what acts between blocks, disks and anchors: one
+            :class:`~masonry_fdem.interactions.protocol.Interaction` or a sequence of them
+            (contact, joints, disks, disk–block contact, anchors, a user's), or None.
+            Their bounds enter the stable time step.
 
     Raises:
         UnstableTimeStepError: ``dt`` exceeds the critical time step.
@@ -83,23 +108,16 @@ class ExplicitSolver:
         safety: float = DT_SAFETY,
         damping: float = 0.0,
         load_factor: float | Callable[[float], float] = 1.0,
-        contact=None,
-        disks=None,
-        anchors=None,
+        interactions: Interaction | Sequence[Interaction] | None = None,
     ):
         self.model = model
-        self.contact = contact
-        self.interactions = as_interactions(contact)
-        self.anchors = anchors
-        if anchors is not None:
-            self.interactions.append(anchors)
-        self.disks = disks
-        self.dt_critical = model.stable_time_step(
-            extra_omega2=sum(c.stable_omega2() for c in self.interactions)
-        )
-        if disks is not None:
-            w2 = disks.stable_omega2() + sum(c.stable_omega2() for c in disks.couplings)
-            self.dt_critical = min(self.dt_critical, 2.0 / np.sqrt(w2))
+        self.interactions = as_interactions(interactions)
+        owned = owned_dofsets(self.interactions)
+        w2 = summed_omega2(self.interactions, owned)
+        self.dt_critical = model.stable_time_step(extra_omega2=w2[BLOCKS])
+        for name in owned:
+            if w2[name] > 0:
+                self.dt_critical = min(self.dt_critical, 2.0 / np.sqrt(w2[name]))
         if dt is None:
             if not 0 < safety <= 1:
                 raise ValueError(f"time-step safety factor must be in (0, 1], got {safety}")
@@ -109,7 +127,7 @@ class ExplicitSolver:
         elif dt > self.dt_critical:
             raise UnstableTimeStepError(
                 f"time step {dt:.6g} s exceeds the stable time step "
-                f"{self.dt_critical:.6g} s (2/omega_max of the blocks)"
+                f"{self.dt_critical:.6g} s (2/omega_max of the blocks and interactions)"
             )
         if damping < 0:
             raise ValueError(f"damping must be >= 0 1/s, got {damping}")
@@ -123,20 +141,37 @@ class ExplicitSolver:
         self.f_ext = model.external_force(self._factor(0.0))
         self.reaction = np.zeros_like(self.f_ext)
         self.f_con = np.zeros_like(self.f_ext)
-        self.energy = np.zeros(K.N_ENERGY)
-        self.kinetic0 = model.kinetic_energy()
+        self.sets = [_Set(BLOCKS, model.u.x.array, model.v, model.f_int, self.f_ext,
+                          self.f_con, model.mass, self.presc, self.vp, self.reaction, False,
+                          {})]
+        for ds in owned.values():
+            self.sets.append(_Set(ds.name, ds.u, ds.v, np.zeros_like(ds.u), ds.f_ext, ds.f,
+                                  ds.mass, ds.presc, ds.vp, ds.reaction, ds.replicated,
+                                  ds.prescriptions))
+        self.kinetic0 = sum(self._kinetic(s) for s in self.sets)
+        u = {s.name: s.u for s in self.sets}
+        v = {s.name: s.v for s in self.sets}
+        # each interaction adds into arrays of its own, so the work of its forces is known
+        self._states = [State(u, v, {s.name: np.zeros_like(s.u) for s in self.sets},
+                              self.dt, True) for _ in self.interactions]
+        self.work = np.zeros(len(self.interactions))
+        self.names = _unique_names(self.interactions)
         if model.comm.rank == 0:
             log.info(
                 "explicit: dt = %.4g s (critical %.4g s, safety %.3g)",
                 self.dt, self.dt_critical, self.dt / self.dt_critical,
             )
 
+    def _kinetic(self, s: _Set) -> float:
+        ke = 0.5 * float(np.dot(s.mass * s.v, s.v))
+        return ke if s.replicated else self.model.comm.allreduce(ke)
+
     def _factor(self, t: float) -> float:
         lf = self.load_factor
         return float(lf(t)) if callable(lf) else float(lf)
 
     def step(self) -> None:
-        """Advance one time step (collective only through the model's assembly)."""
+        """Advance one time step (collective)."""
         m = self.model
         t_half = self.t + 0.5 * self.dt
         for p in self._timed:
@@ -145,31 +180,24 @@ class ExplicitSolver:
             m.external_force(self._factor(self.t), out=self.f_ext)
         m.qstate.t_rate = self.dt  # rate-dependent laws see the physical step
         m.internal_force(self.model.f_int)
-        if self.interactions:
-            self.f_con.fill(0.0)
-            for c in self.interactions:
-                c.update_neighbours(m.v, self.dt)
-                c.add_forces(self.f_con, m.v, self.dt)
-                if hasattr(c, "commit"):
-                    c.commit()
-        d = self.disks
-        if d is not None:
-            d.compute_forces(self.dt)
-            if d.couplings:
-                if not self.interactions:
-                    self.f_con.fill(0.0)
-                for c in d.couplings:
-                    c.add_forces(self.f_con, m.v, self.dt)
+        for s in self.sets:
+            s.f_con.fill(0.0)
+        for c, st in zip(self.interactions, self._states, strict=True):
+            for s in self.sets:
+                st.f[s.name].fill(0.0)
+            c.update(st)
+            c.add_forces(st)
+            for s in self.sets:
+                s.f_con += st.f[s.name]
+            c.commit()
         m.commit_state()
-        K.central_difference_step(
-            m.u.x.array, m.v, m.f_int, self.f_ext, self.f_con, m.mass, m.minv, self.presc,
-            self.vp, self.damping, self.dt, self.reaction, self.energy,
-        )
-        if d is not None:
-            d.advance(self.dt, self.damping)
-        if self.anchors is not None:
-            a = self.anchors
-            a.advance(self.dt, self.damping)
+        for s in self.sets:
+            K.central_difference_step(s.u, s.v, s.f_int, s.f_ext, s.f_con, s.mass, s.minv,
+                                      s.presc, s.vp, self.damping, self.dt, s.reaction,
+                                      s.energy, s.du)
+        for k, st in enumerate(self._states):
+            for s in self.sets:
+                self.work[k] += np.dot(st.f[s.name], s.du)
         self.t += self.dt
         self.n += 1
 
@@ -191,46 +219,63 @@ class ExplicitSolver:
             raise ValueError("give exactly one of t_end or steps")
         if steps is None:
             steps = max(0, int(np.ceil((t_end - self.t) / self.dt - 1e-9)))
-        good_u = self.model.u.x.array.copy()
-        good_v = self.model.v.copy()
+        good = [(s.u.copy(), s.v.copy()) for s in self.sets]
         good_t = self.t
         t0 = time.perf_counter()
         for k in range(1, steps + 1):
             self.step()
             if k % every == 0 or k == steps:
                 if not self._finite():
-                    self.model.u.x.array[:] = good_u
-                    self.model.v[:] = good_v
+                    for s, (gu, gv) in zip(self.sets, good, strict=True):
+                        s.u[:] = gu
+                        s.v[:] = gv
                     bad_t, self.t = self.t, good_t
                     raise FloatingPointError(
                         f"non-finite displacement or velocity at t = {bad_t:.6g} s "
                         f"(step {self.n}); the state at t = {good_t:.6g} s is kept"
                     )
-                good_u[:] = self.model.u.x.array
-                good_v[:] = self.model.v
+                for s, (gu, gv) in zip(self.sets, good, strict=True):
+                    gu[:] = s.u
+                    gv[:] = s.v
                 good_t = self.t
                 if callback is not None:
                     callback(self)
         log.debug("explicit: %d steps in %.3f s", steps, time.perf_counter() - t0)
 
     def _finite(self) -> bool:
-        ok = bool(np.isfinite(self.energy[K.E_KINETIC]) and np.isfinite(self.model.v).all())
-        if self.anchors is not None:
-            ok = ok and bool(np.isfinite(self.anchors.v).all())
+        ok = all(bool(np.isfinite(s.energy[K.E_KINETIC]) and np.isfinite(s.v).all())
+                 for s in self.sets)
         return bool(self.model.comm.allreduce(ok, op=MPI.LAND))
 
     def energies(self) -> EnergyAccount:
-        """The energy account, summed over ranks (collective)."""
-        e = self.model.comm.allreduce(self.energy.copy())
+        """The energy account over every dof set, summed over ranks, with each
+        interaction's own energies (collective)."""
+        comm = self.model.comm
+        e = np.zeros(K.N_ENERGY)
+        for s in self.sets:
+            if not s.replicated:
+                e += s.energy
+        e = comm.allreduce(e)
+        for s in self.sets:
+            if s.replicated:
+                e = e + s.energy
         bal = (
             e[K.E_KINETIC] + e[K.E_INTERNAL] + e[K.E_DAMPING]
             - e[K.E_EXTERNAL] - e[K.E_SUPPORT] - e[K.E_CONTACT] - self.kinetic0
         )
+        work = comm.allreduce(self.work.copy())
+        per, held = {}, 0.0
+        for name, c, w in zip(self.names, self.interactions, work, strict=True):
+            en = dict(c.energies())
+            en["work"] = float(w)
+            held += en.get("stored", 0.0) + en.get("dissipated", 0.0)
+            per[name] = en
         return EnergyAccount(
             kinetic=float(e[K.E_KINETIC]), internal=float(e[K.E_INTERNAL]),
             external=float(e[K.E_EXTERNAL]), damping=float(e[K.E_DAMPING]),
             support=float(e[K.E_SUPPORT]), contact=float(e[K.E_CONTACT]),
-            balance=float(bal),
+            balance=float(bal), interactions=per,
+            unaccounted=float(e[K.E_CONTACT] + held),
         )
 
     def reactions(self) -> dict[str, np.ndarray]:
@@ -240,8 +285,20 @@ class ExplicitSolver:
             r = np.zeros(2)
             np.add.at(r, p.components, self.reaction[p.dofs])
             out[p.name] = self.model.comm.allreduce(r)
-        if self.anchors is not None:
-            a = self.anchors
-            for name, dofs in a.prescriptions.items():
-                out[name] = a.reaction[dofs].copy()
+        for s in self.sets[1:]:
+            for name, dofs in s.prescriptions.items():
+                out[name] = s.reaction[dofs].copy()
         return out
+
+
+def _unique_names(interactions: list[Interaction]) -> list[str]:
+    """The interactions' names, numbered where one repeats ("contact", "contact#2")."""
+    names: list[str] = []
+    for c in interactions:
+        base = str(c.name)
+        name, k = base, 1
+        while name in names:
+            k += 1
+            name = f"{base}#{k}"
+        names.append(name)
+    return names

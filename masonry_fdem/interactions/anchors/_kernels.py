@@ -272,24 +272,3 @@ def relative_displacements(ua, ub, hnode, hosts, hw, d):
         relative_displacement(ua, ub, hnode, hosts, hw, h, tmp)
         d[h, 0] = tmp[0]
         d[h, 1] = tmp[1]
-
-
-@njit(cache=True)
-def anchor_step(u, v, f, m, presc, vp, damping, dt, reaction):
-    """Central-difference step of the anchor nodes (lumped mass, mass-proportional
-    damping α [1/s]); prescribed dofs move with ``vp`` and ``reaction`` gets the force the
-    support applies [N]. Returns the kinetic energy at the half step [J]."""
-    a1 = 1.0 - 0.5 * damping * dt
-    a2 = 1.0 / (1.0 + 0.5 * damping * dt)
-    kin = 0.0
-    for i in range(u.size):
-        vo = v[i]
-        if presc[i]:
-            vn = vp[i]
-            reaction[i] = m[i] * (vn - vo) / dt + 0.5 * damping * m[i] * (vn + vo) - f[i]
-        else:
-            vn = (a1 * vo + dt * f[i] / m[i]) * a2
-        kin += 0.5 * m[i] * vn * vn
-        v[i] = vn
-        u[i] += dt * vn
-    return kin

@@ -50,8 +50,10 @@ from mpi4py import MPI
 
 import numpy as np
 
+from masonry_fdem.checks import check_positive
 from masonry_fdem.geometry.locate import locate_in_block, locate_points
 from masonry_fdem.interactions.anchors import _kernels as AK
+from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction, State
 
 __all__ = [
     "SteelLaw",
@@ -66,13 +68,6 @@ __all__ = [
 # a spring of any direction adds at most this times its stiffness to a dof's row sum
 _DIR = 0.5 * (1.0 + math.sqrt(2.0))
 _PLATES = {"none": (0, 0), "start": (1, 0), "end": (0, 1), "both": (1, 1)}
-
-
-def _positive(name: str, value: float, allow_zero: bool = False, allow_inf: bool = False):
-    ok = (value >= 0 if allow_zero else value > 0) and (allow_inf or np.isfinite(value))
-    if not (np.isscalar(value) and not np.isnan(value) and ok):
-        sign = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be {sign}, got {value}")
 
 
 @dataclass(frozen=True)
@@ -96,11 +91,11 @@ class SteelLaw:
     density: float = 7850.0
 
     def __post_init__(self) -> None:
-        _positive("steel E", self.E)
-        _positive("steel yield_stress", self.yield_stress)
-        _positive("steel hardening", self.hardening, allow_zero=True)
-        _positive("steel density", self.density)
-        _positive("steel rupture_strain", self.rupture_strain, allow_inf=True)
+        check_positive("steel E", self.E)
+        check_positive("steel yield_stress", self.yield_stress)
+        check_positive("steel hardening", self.hardening, allow_zero=True)
+        check_positive("steel density", self.density)
+        check_positive("steel rupture_strain", self.rupture_strain, allow_inf=True)
         if self.rupture_strain <= self.yield_stress / self.E:
             raise ValueError(
                 f"rupture_strain {self.rupture_strain} must exceed the yield strain "
@@ -197,8 +192,8 @@ class DowelLaw:
     strength: float = math.inf
 
     def __post_init__(self) -> None:
-        _positive("dowel stiffness", self.stiffness)
-        _positive("dowel strength", self.strength, allow_inf=True)
+        check_positive("dowel stiffness", self.stiffness)
+        check_positive("dowel strength", self.strength, allow_inf=True)
 
 
 @dataclass(frozen=True)
@@ -247,15 +242,15 @@ class Anchor:
         if np.any(np.linalg.norm(np.diff(p, axis=0), axis=1) <= 0):
             raise ValueError(f"{label}: two consecutive points coincide")
         object.__setattr__(self, "points", p)
-        _positive(f"{label}: diameter", self.diameter)
+        check_positive(f"{label}: diameter", self.diameter)
         if self.bond_diameter is not None:
-            _positive(f"{label}: bond_diameter", self.bond_diameter)
-        _positive(f"{label}: prestress", self.prestress, allow_zero=True)
-        _positive(f"{label}: count", self.count)
+            check_positive(f"{label}: bond_diameter", self.bond_diameter)
+        check_positive(f"{label}: prestress", self.prestress, allow_zero=True)
+        check_positive(f"{label}: count", self.count)
         if self.segment is not None:
-            _positive(f"{label}: segment", self.segment)
+            check_positive(f"{label}: segment", self.segment)
         if self.plate_stiffness is not None:
-            _positive(f"{label}: plate_stiffness", self.plate_stiffness)
+            check_positive(f"{label}: plate_stiffness", self.plate_stiffness)
         if self.plates not in _PLATES:
             raise ValueError(f"{label}: plates must be one of {list(_PLATES)}, "
                              f"got {self.plates!r}")
@@ -334,7 +329,7 @@ def _boundary_crossings(blocks, p: np.ndarray, q: np.ndarray, seg: float) -> lis
     return out
 
 
-class Anchors:
+class Anchors(Interaction):
     """The anchors of a model: bar elements, their nodes and their ties to the blocks.
 
     Args:
@@ -345,11 +340,17 @@ class Anchors:
         ValueError: an anchor lies wholly outside the blocks, or only its end nodes are
             inside (nothing to bond to), or a definition is invalid.
 
-    Pass it to a solver as ``anchors=``: ``ExplicitSolver(model, anchors=a)`` advances the
-    bar nodes with the blocks; ``DynamicRelaxation(model, anchors=a)`` makes them unknowns
-    of the equilibrium iteration, and commits their bond and steel state at converged
-    increments only.
+    An :class:`~masonry_fdem.interactions.protocol.Interaction` that owns the dof set
+    ``"anchors"`` (the bar nodes): ``ExplicitSolver(model, interactions=[..., a])``
+    advances the bar nodes with the blocks; ``DynamicRelaxation(model, interactions=[...,
+    a])`` makes them unknowns of the equilibrium iteration. Bond and steel states are
+    trial states from the committed one, accepted by ``commit`` (every explicit step, a
+    converged increment).
     """
+
+    name = "anchors"
+    state_attributes = ("u", "v", "es", "et", "ns", "nt", "dref", "axial", "strain",
+                        "bond_out", "jacking", "npr", "ep", "reaction")
 
     def __init__(self, model, anchors: Sequence[Anchor]):
         anchors = list(anchors) if not isinstance(anchors, Anchor) else [anchors]
@@ -508,7 +509,9 @@ class Anchors:
         self.vp = np.zeros(2 * n)
         self.reaction = np.zeros(2 * n)
         self.prescriptions: dict[str, np.ndarray] = {}
-        self.kinetic = 0.0
+        self._dofset = DofSet("anchors", self.u, self.v, self.mass, self.f, presc=self.presc,
+                              vp=self.vp, reaction=self.reaction,
+                              prescriptions=self.prescriptions)
         # ---- stiffness bounds (row sums of |K|) for time steps and DR masses
         k_h = self.npr[:, AK.NP_BOND] * self.laws_k0[self.npr[:, AK.NP_LAW].astype(int)]
         k_h += self.npr[:, AK.NP_KT] + self.npr[:, AK.NP_KP]
@@ -563,45 +566,52 @@ class Anchors:
                 self.u[dofs[c]] = float(value[c])
 
     # ------------------------------------------------------------------ interaction API
-    def stable_omega2(self) -> float:
+    def dofsets(self) -> tuple[DofSet, ...]:
+        """The bar nodes (x, y per node), held where prescribed (:meth:`prescribe`)."""
+        return (self._dofset,)
+
+    def stable_omega2(self) -> dict[str, float]:
         """Bound of ω² [1/s²] the anchors add (Gershgorin on M⁻¹K of their springs, at the
         bar nodes and at the host nodes), global."""
         w2 = float(np.max(self.rowsum / self.mass))
         free = self.host_rowsum > 0
         if free.any():
             w2 = max(w2, float(np.max(self.host_rowsum[free] / self.model.mass[free])))
-        return self.comm.allreduce(w2, op=MPI.MAX)
+        w2 = self.comm.allreduce(w2, op=MPI.MAX)
+        return {BLOCKS: w2, "anchors": w2}
 
-    def stiffness_rowsum(self) -> np.ndarray:
-        """Σ_j |K_ij| [N/m] the anchors add to each local block dof."""
-        return self.host_rowsum
+    def add_rowsum(self, rows) -> None:
+        """Σ_j |K_ij| [N/m] of the bars and ties into the block and bar-node rows."""
+        rows[BLOCKS] += self.host_rowsum
+        rows["anchors"] += self.rowsum
 
-    def update_neighbours(self, v: np.ndarray, dt: float) -> None:
-        """Nothing to do: the hosts are fixed at set-up."""
-
-    def add_forces(self, f: np.ndarray, v: np.ndarray, dt: float, damping: bool = True) -> None:
-        """Bond, dowel and plate forces on the local host nodes into ``f`` (+=); the total
-        force on every bar node into ``self.f`` (collective)."""
+    def add_forces(self, state: State) -> None:
+        """Bond, dowel and plate forces on the local host nodes, and the total force on
+        every bar node (bond summed over ranks, then the bars'; collective)."""
         self._fbond.fill(0.0)
-        AK.bond_forces(self.x, self.u, self.model.u.x.array, self.conn, self.hnode,
+        ua, fa = state.u["anchors"], state.f["anchors"]
+        AK.bond_forces(self.x, ua, state.u[BLOCKS], self.conn, self.hnode,
                        self.helem, self.hosts, self.hw, self.npr, self.laws_s, self.laws_t,
                        self.laws_n, self.laws_k0, self.dref, self.ns, self.nt, self.bond_out,
-                       self._fbond, f)
+                       self._fbond, state.f[BLOCKS])
         if self.comm.size > 1:
             self.comm.Allreduce(MPI.IN_PLACE, self._fbond, op=MPI.SUM)
-        self.f[:] = self._fbond
-        AK.bar_forces(self.x, self.u, self.conn, self.L0, self.ep, self.jacking, self.es,
-                      self.et, self.axial, self.strain, self.f)
+        fa += self._fbond
+        AK.bar_forces(self.x, ua, self.conn, self.L0, self.ep, self.jacking, self.es,
+                      self.et, self.axial, self.strain, fa)
 
     def commit(self) -> None:
         """Accept the trial bond and steel state."""
         self.es[:] = self.et
         self.ns[:] = self.nt
 
-    def advance(self, dt: float, damping: float = 0.0) -> None:
-        """One central-difference step of the bar nodes with ``self.f``."""
-        self.kinetic = AK.anchor_step(self.u, self.v, self.f, self.mass, self.presc,
-                                      self.vp, damping, dt, self.reaction)
+    def energies(self) -> dict[str, float]:
+        """Elastic energy of the bars, ½ Σ N² L0/(E A) [J], the part of the anchors'
+        energy held now; bond and dissipated energies are not tracked (the work the
+        anchors' forces do is in the solver's energy account)."""
+        area = self.ep[:, AK.EP_AREA]
+        bar = 0.5 * float(np.sum(self.axial**2 * self.L0 / (self.ep[:, AK.EP_E] * area)))
+        return {"stored": bar, "dissipated": 0.0, "bar_elastic": bar}
 
     def lock_off(self) -> None:
         """Lock the jacked anchors off at their prestress and grout them (collective).

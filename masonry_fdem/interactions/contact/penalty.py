@@ -26,6 +26,7 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.interactions.contact import _kernels as K
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.interactions.search import facet_boxes, max_speed, self_pairs
 from masonry_fdem.parallel import exchange_ids
 
@@ -94,7 +95,7 @@ class ContactSettings:
             raise ValueError("rebuild_every must be >= 1")
 
 
-class BlockContact:
+class BlockContact(Interaction):
     """Contact between the blocks of a model, across ranks too.
 
     Every rank evaluates the pairs of its own facets and, for a facet of another rank
@@ -106,7 +107,15 @@ class BlockContact:
     Args:
         model: the :class:`~masonry_fdem.model.Model`.
         settings: contact settings.
+
+    An :class:`~masonry_fdem.interactions.protocol.Interaction`: its history is the
+    tangential spring and the largest penetration of every pair, by pair key; ``commit``
+    keeps a copy that ``restore`` brings back (the candidate list is then rebuilt).
     """
+
+    name = "contact"
+    state_attributes = ("keys", "tau", "pmax", "excluded", "bonded_block", "energy",
+                        "dissipated", "rebuilds")
 
     def __init__(self, model, settings: ContactSettings | None = None):
         self.model = model
@@ -170,6 +179,7 @@ class BlockContact:
         self.since = 0
         self.rebuilds = 0
         self.exchange = None
+        self._committed = (self.keys.copy(), self.tau.copy(), self.pmax.copy())
         self._build_extended(np.zeros(0, dtype=np.int64), [np.zeros(0, np.int64)] * comm.size)
 
     # ------------------------------------------------------------------ extended arrays
@@ -245,8 +255,8 @@ class BlockContact:
             self.v[nloc:] = self._ghost_uv[:, 2:].ravel()
 
     # ------------------------------------------------------------------ time step
-    def stable_omega2(self) -> float:
-        """Bound of ω² [1/s²] the contact springs add (collective).
+    def stable_omega2(self) -> dict[str, float]:
+        """Bound of ω² [1/s²] the contact springs add to the block nodes (collective).
 
         A boundary node's contact springs are at most ε_n w L_adj (L_adj: the length of
         its two facets, ε_n the stiffest penalty its material has with any material),
@@ -260,7 +270,7 @@ class BlockContact:
         mn = m.mass[2 * nodes]
         m_min = self.comm.allreduce(float(mn.min()) if mn.size else np.inf, op=MPI.MIN)
         w2 = k[nodes] * (1.0 / mn + 1.0 / m_min) if nodes.size else np.zeros(1)
-        return self.comm.allreduce(float(np.max(w2)), op=MPI.MAX)
+        return {BLOCKS: self.comm.allreduce(float(np.max(w2)), op=MPI.MAX)}
 
     def _local_spring_bound(self):
         """Boundary nodes of this rank and ε_n w L_adj [N/m] per local node."""
@@ -273,11 +283,11 @@ class BlockContact:
         np.add.at(k, fl[:, 1], w)
         return np.unique(fl), k
 
-    def stiffness_rowsum(self) -> np.ndarray:
-        """(2 n_nodes,) bound of Σ_j |K_ij| [N/m] of the contact springs (for the fictitious
-        masses of dynamic relaxation): twice the node's spring bound."""
+    def add_rowsum(self, rows) -> None:
+        """Bound of Σ_j |K_ij| [N/m] of the contact springs into the block rows (for the
+        fictitious masses of dynamic relaxation): twice the node's spring bound."""
         _, k = self._local_spring_bound()
-        return np.repeat(2.0 * k, 2)
+        rows[BLOCKS] += np.repeat(2.0 * k, 2)
 
     # ------------------------------------------------------------------ neighbours
     def rebuild(self, v: np.ndarray | None = None) -> None:
@@ -363,13 +373,10 @@ class BlockContact:
         self.since = 0
         self.rebuilds += 1
 
-    def update_neighbours(self, v: np.ndarray, dt: float) -> None:
-        """Rebuild when due, or when the relative travel could exceed the margin.
-
-        Args:
-            v: nodal velocities [m/s] of the coming step (flat, local dofs).
-            dt: the coming step [s].
-        """
+    def update(self, state: State) -> None:
+        """Rebuild when due, or when the relative travel could exceed the margin (the
+        block velocities of ``state`` [m/s] over its step ``dt`` [s]; collective)."""
+        v, dt = state.v[BLOCKS], state.dt
         step_travel = 2.0 * max_speed(v) * dt
         step_travel = self.comm.allreduce(step_travel, op=MPI.MAX)
         if (self.since >= self.settings.rebuild_every
@@ -379,15 +386,11 @@ class BlockContact:
         self.since += 1
 
     # ------------------------------------------------------------------ forces
-    def add_forces(self, f: np.ndarray, v: np.ndarray, dt: float, damping: bool = True) -> None:
-        """Add the contact forces [N] at the current displacement to ``f`` (collective).
-
-        Args:
-            f: (2 n_nodes,) local force array, added to.
-            v: local velocities [m/s] (for damping and the tangential slip increment v·dt).
-            dt: time step [s].
-            damping: apply the restitution (hysteretic unloading; off in dynamic relaxation).
-        """
+    def add_forces(self, state: State) -> None:
+        """Add the contact forces [N] at the current displacement to ``state.f`` (the
+        velocities give the tangential slip increment v·dt; ``state.damping`` switches the
+        restitution's hysteretic unloading, off in dynamic relaxation; collective)."""
+        f, v, dt, damping = state.f[BLOCKS], state.v[BLOCKS], state.dt, state.damping
         self._sync(v)
         self.f.fill(0.0)
         K.facet_facet_forces(
@@ -403,13 +406,39 @@ class BlockContact:
         self.dissipated += self.energy[2]
 
     def energies(self) -> dict[str, float]:
-        """Stored normal/tangential penalty energy and frictional dissipation [J]."""
-        c = self.comm
-        return {
-            "contact_normal": c.allreduce(float(self.energy[0])),
-            "contact_tangential": c.allreduce(float(self.energy[1])),
-            "friction_dissipated": c.allreduce(float(self.dissipated)),
-        }
+        """Stored normal/tangential penalty energy and frictional dissipation [J]
+        (collective)."""
+        n, t, d = self.comm.allreduce(np.array([self.energy[0], self.energy[1],
+                                                self.dissipated]))
+        return {"stored": float(n + t), "dissipated": float(d), "contact_normal": float(n),
+                "contact_tangential": float(t), "friction_dissipated": float(d)}
+
+    def commit(self) -> None:
+        """Keep the pairs' tangential history as the one :meth:`restore` returns to."""
+        keys, tau, pmax = self._committed
+        if keys.shape != self.keys.shape:
+            self._committed = (self.keys.copy(), self.tau.copy(), self.pmax.copy())
+            return
+        np.copyto(keys, self.keys)
+        np.copyto(tau, self.tau)
+        np.copyto(pmax, self.pmax)
+
+    def restore(self) -> None:
+        """Back to the committed history; candidates found again at rest (collective)."""
+        self.keys, self.tau, self.pmax = (a.copy() for a in self._committed)
+        self.rebuild(np.zeros_like(self.model.v))
+
+    def _state_changed(self) -> None:
+        self.commit()
+        self.rebuild(np.zeros_like(self.model.v))
+
+    def exclude(self, keys: np.ndarray, bonded_block: np.ndarray) -> None:
+        """Leave out the facet pairs ``keys`` (min·n + max of global facet ids: bonded
+        joints) and every pair between two blocks flagged in ``bonded_block`` (held all
+        round by intact joints); the candidates are found again before the next step."""
+        self.excluded = np.sort(np.asarray(keys, dtype=np.int64))
+        self.bonded_block = np.asarray(bonded_block, dtype=bool)
+        self.since = self.settings.rebuild_every
 
     def active_pairs(self) -> np.ndarray:
         """(k, 2) global facet ids of the pairs in contact now, on every rank (diagnostic,

@@ -489,7 +489,7 @@ def max_move(x, x_ref):
 
 
 @njit(cache=True)
-def max_node_move(X, u, u_ref, nodes):
+def max_node_move(u, u_ref, nodes):
     """Largest displacement [m] of the given block nodes since ``u_ref``."""
     m2 = 0.0
     for k in range(nodes.size):

@@ -24,17 +24,20 @@ from numba import njit
 
 from masonry_fdem.interactions.disks import _facet_kernels as DF
 from masonry_fdem.interactions.disks import _kernels as DK
+from masonry_fdem.interactions.disks.disks import add_disk_rowsum, commit_history
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.interactions.search import facet_boxes
 from masonry_fdem.interactions.search.adt import build_adt, query_adt
 
 __all__ = ["DiskBlockContact"]
 
 
-class DiskBlockContact:
+class DiskBlockContact(Interaction):
     """Disk–block contact (see the module docstring).
 
     Args:
-        disks: the :class:`~masonry_fdem.interactions.disks.Disks` set (registered with it).
+        disks: the :class:`~masonry_fdem.interactions.disks.Disks` set (give both to the
+            solver: ``interactions=[disks, DiskBlockContact(disks, model)]``).
         model: the :class:`~masonry_fdem.model.Model` of the blocks.
         friction: Coulomb coefficient μ between disks and blocks (default: the disks').
         stiffness: penalty factor: the contact's tangent stiffness per unit thickness is
@@ -46,6 +49,10 @@ class DiskBlockContact:
             rigid block at the reference overlap (0: elastic).
         margin: travel margin [m] of the candidate list (default 0.2 r_min).
     """
+
+    name = "disk_block"
+    state_attributes = ("pairs", "ptr", "cand", "params", "hist", "out", "parts", "work",
+                        "dissipated", "u_ref", "x_ref", "rebuilds")
 
     def __init__(self, disks, model, *, friction: float | None = None, stiffness: float = 1.0,
                  rel_overlap: float = 0.01, tangential_ratio: float = 0.5,
@@ -108,17 +115,17 @@ class DiskBlockContact:
         self.parts = np.zeros((0, DF.N_PART))
         self.work = np.zeros(DF.N_WORK)
         self.dissipated = 0.0
-        self.f_disk = np.zeros_like(disks.f)
-        self.torque = np.zeros_like(disks.torque)
+        self.f_disk = np.zeros((disks.n, 2))
+        self.torque = np.zeros(disks.n)
         self._sum = np.zeros(3 * disks.n)
         self.rebuilds = 0
         self._fresh = True
-        disks.couplings.append(self)
+        self._committed = (self.pairs.copy(), self.hist.copy())
 
     # ------------------------------------------------------------------ time step
-    def stable_omega2(self) -> float:
+    def stable_omega2(self) -> dict[str, float]:
         """ω² bound [1/s²] of a disk on a rigid block: max(2 ε_a w r, 3 k_t)/m over disk
-        and block materials (smallest disk), plus the damping's effect (collective)."""
+        and block materials (smallest disk), plus the damping's effect."""
         d = self.disks
         k = int(np.argmin(d.m))
         w2 = 0.0
@@ -129,13 +136,18 @@ class DiskBlockContact:
                          3.0 * p[DF.P_KT])
                 w2 = max(w2, kk / d.m[k])
         z = self.damping_ratio
-        return w2 / (math.sqrt(1.0 + z * z) - z) ** 2
+        return {"disks": w2 / (math.sqrt(1.0 + z * z) - z) ** 2}
+
+    def add_rowsum(self, rows) -> None:
+        """The stiffest disk–block spring, ω² m_min [N/m], on every disk translation (r²
+        times that on the rotations); the blocks' rows are bounded by their own
+        stiffness."""
+        add_disk_rowsum(rows, self.stable_omega2()["disks"] * float(self.disks.m.min()),
+                        self.disks.r)
 
     # ------------------------------------------------------------------ per step
-    def _rebuild(self) -> None:
+    def _rebuild(self, u: np.ndarray, xd: np.ndarray) -> None:
         d = self.disks
-        m = self.model
-        u = m.u.x.array
         nf = self.facets.shape[0]
         hist_old, keys_old = self.hist, self._keys() if self.pairs.size else np.zeros(0, np.int64)
         if nf == 0:
@@ -145,7 +157,7 @@ class DiskBlockContact:
             facet_boxes(self.X, u, self.facets, self.margin, self.boxes)
             tree = build_adt(self.boxes)
             rr = d.r + self.margin
-            qboxes = np.c_[d.x[:, 0] - rr, d.x[:, 1] - rr, d.x[:, 0] + rr, d.x[:, 1] + rr]
+            qboxes = np.c_[xd[:, 0] - rr, xd[:, 1] - rr, xd[:, 0] + rr, xd[:, 1] + rr]
             qi, it = query_adt(tree, qboxes)
         blk = self.facet_block[it]
         order = np.lexsort((it, blk, qi))
@@ -177,40 +189,59 @@ class DiskBlockContact:
         self.out = np.zeros((npairs, DF.N_OUT))
         self.parts = np.zeros((self.cand.size, DF.N_PART))
         self.u_ref[:] = u
-        self.x_ref[:] = d.x
+        self.x_ref[:] = xd
         self.rebuilds += 1
 
     def _keys(self) -> np.ndarray:
         return self.pairs[:, 0] * (self.model.blocks.n_blocks + 1) + self.pairs[:, 1]
 
-    def add_forces(self, f, v, dt) -> None:
-        """Add the contact forces on the block nodes to ``f`` (flat, local dofs) and on the
-        disks to ``disks.f`` and ``disks.torque`` (summed over ranks)."""
-        d = self.disks
-        u = self.model.u.x.array
-        if (self._fresh or DK.max_move(d.x, self.x_ref) > 0.5 * self.margin
-                or DK.max_node_move(self.X, u, self.u_ref, self.nodes) > 0.5 * self.margin):
-            self._rebuild()
+    def update(self, state: State) -> None:
+        """Find the candidate (disk, facet) pairs again once a disk or a facet node has
+        moved by half the margin (collective)."""
+        u, xd = state.u[BLOCKS], state.u["disks"].reshape(-1, 2)
+        if (self._fresh or DK.max_move(xd, self.x_ref) > 0.5 * self.margin
+                or DK.max_node_move(u, self.u_ref, self.nodes) > 0.5 * self.margin):
+            self._rebuild(u, xd)
             self._fresh = False
+
+    def add_forces(self, state: State) -> None:
+        """Contact forces on the local block nodes, and on the disks summed over ranks
+        (collective)."""
+        d = self.disks
         self.f_disk.fill(0.0)
         self.torque.fill(0.0)
-        DF.disk_block_forces(self.X, u, v, self.facets, self.fprev, self.fnext, d.x, d.v,
-                             d.omega, d.r, self.pairs, self.ptr, self.cand, self.params,
-                             self.hist, dt, f, self.f_disk, self.torque, self.work, self.out,
+        DF.disk_block_forces(self.X, state.u[BLOCKS], state.v[BLOCKS], self.facets, self.fprev,
+                             self.fnext, state.u["disks"].reshape(-1, 2),
+                             state.v["disks"].reshape(-1, 2), state.v["disk_rotations"], d.r,
+                             self.pairs, self.ptr, self.cand, self.params, self.hist, state.dt,
+                             state.f[BLOCKS], self.f_disk, self.torque, self.work, self.out,
                              self.parts)
         self.dissipated += self.work[DF.W_FRICTION] + self.work[DF.W_DAMPING]
+        buf = self._sum
+        n = d.n
+        buf[: 2 * n] = self.f_disk.ravel()
+        buf[2 * n:] = self.torque
         if self.comm.size > 1:
-            buf = self._sum
-            n = d.n
-            buf[: 2 * n] = self.f_disk.ravel()
-            buf[2 * n:] = self.torque
             self.comm.Allreduce(MPI.IN_PLACE, buf, op=MPI.SUM)
-            d.f += buf[: 2 * n].reshape(-1, 2)
-            d.torque += buf[2 * n:]
-        else:
-            d.f += self.f_disk
-            d.torque += self.torque
+        state.f["disks"] += buf[: 2 * n]
+        state.f["disk_rotations"] += buf[2 * n:]
 
-    def stored_energy(self) -> float:
-        """Elastic energy in the disk–block contacts now [J] (collective)."""
-        return self.comm.allreduce(float(self.work[DF.W_NORMAL] + self.work[DF.W_TANGENT]))
+    def energies(self) -> dict[str, float]:
+        """Elastic energy in the disk–block contacts now and dissipated by friction and
+        damping since the start [J] (collective)."""
+        stored, lost = self.comm.allreduce(np.array(
+            [self.work[DF.W_NORMAL] + self.work[DF.W_TANGENT], self.dissipated]))
+        return {"stored": float(stored), "dissipated": float(lost)}
+
+    def commit(self) -> None:
+        """Keep the friction history for :meth:`restore`."""
+        self._committed = commit_history(self._committed, self.pairs, self.hist)
+
+    def restore(self) -> None:
+        """Back to the committed friction history (the candidates are found again)."""
+        pairs, hist = self._committed
+        self.pairs, self.hist = pairs.copy(), hist.copy()
+        self._fresh = True
+
+    def _state_changed(self) -> None:
+        self.commit()

@@ -4,7 +4,12 @@ A :class:`Disks` set holds, per disk, the centre x (n, 2) [m], rotation θ [rad]
 v (n, 2) [m/s] and angular velocity ω [rad/s] (both at half steps, as the blocks'), radius
 r [m], mass m = ρ π r² w [kg] and rotational inertia I = m r²/2 [kg m²] for the
 out-of-plane thickness w [m] of the model. Disks are advanced by the same central-difference
-step as the blocks (:class:`~masonry_fdem.solvers.ExplicitSolver` with ``disks=``).
+step as the blocks.
+
+The set is an :class:`~masonry_fdem.interactions.protocol.Interaction` (disk–disk contact)
+that owns two dof sets, ``"disks"`` (centres) and ``"disk_rotations"``, advanced by the
+solvers' one integrator with the blocks: ``ExplicitSolver(model, interactions=[disks,
+DiskBlockContact(disks, model)])``.
 
 Disk–disk contact is Hertz–Mindlin–Coulomb with hysteretic restitution and optional rolling
 resistance (:mod:`masonry_fdem.interactions.disks._kernels`, where the 2D law is stated and
@@ -31,20 +36,30 @@ from pathlib import Path
 from mpi4py import MPI
 
 import numpy as np
-from numba import njit
 
 from masonry_fdem.constants import G
 from masonry_fdem.interactions.disks import _kernels as DK
+from masonry_fdem.interactions.protocol import DofSet, Interaction, State
 
-__all__ = ["DiskMaterial", "Disks"]
+__all__ = ["DiskMaterial", "Disks", "add_disk_rowsum", "commit_history"]
 
-# energy account of the disks (entries of Disks.energy)
-D_KINETIC = 0  # kinetic energy at the half step [J]
-D_GRAVITY = 1  # work done by gravity [J]
-D_DAMPING = 2  # dissipated by mass-proportional damping [J]
-D_FORCES = 3  # work done by all forces on the disks, gravity included [J]
-N_DENERGY = 4
 
+def add_disk_rowsum(rows, k: float, r: np.ndarray) -> None:
+    """Add a spring bound k [N/m] to every disk translation and k r² to every rotation."""
+    rows["disks"] += k
+    rows["disk_rotations"] += k * r * r
+
+
+def commit_history(committed: tuple[np.ndarray, np.ndarray], pairs: np.ndarray,
+                   hist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Copies of (pairs, history) for a later restore, into ``committed`` when the sizes
+    agree (no allocation in a time loop between neighbour-list rebuilds)."""
+    cp, ch = committed
+    if cp.shape != pairs.shape or ch.shape != hist.shape:
+        return pairs.copy(), hist.copy()
+    np.copyto(cp, pairs)
+    np.copyto(ch, hist)
+    return committed
 
 @dataclass(frozen=True)
 class DiskMaterial:
@@ -89,62 +104,7 @@ class DiskMaterial:
         return out
 
 
-@njit(cache=True)
-def disk_step(x, theta, v, omega, f, torque, m, inertia, fixed, g, damping, dt, energy):
-    """Central-difference step of the disks with mass-proportional damping c [1/s].
-
-    On entry v, ω hold the half step n − ½ and x, θ step n; f, torque the forces [N] and
-    torques [N m] at step n (gravity m g included). Fixed disks (fixed[i] = 1) do not move.
-    ``energy`` (N_DENERGY,) gets the half-step kinetic energy and accumulates the midpoint
-    work of gravity, of damping and of all forces, so that
-    K − K0 + W_damping = W_forces holds to round-off.
-    """
-    a = 1.0 - 0.5 * damping * dt
-    b = 1.0 / (1.0 + 0.5 * damping * dt)
-    ke = 0.0
-    damp = 0.0
-    wg = 0.0
-    wf = 0.0
-    for i in range(x.shape[0]):
-        if fixed[i]:
-            v[i, 0] = 0.0
-            v[i, 1] = 0.0
-            omega[i] = 0.0
-            continue
-        for c in range(2):
-            v_old = v[i, c]
-            v_new = (a * v_old + dt * f[i, c] / m[i]) * b
-            vm = 0.5 * (v_old + v_new)
-            damp += damping * m[i] * vm * vm * dt
-            wg += m[i] * g[c] * vm * dt
-            wf += f[i, c] * vm * dt
-            v[i, c] = v_new
-            x[i, c] += dt * v_new
-            ke += 0.5 * m[i] * v_new * v_new
-        w_old = omega[i]
-        w_new = (a * w_old + dt * torque[i] / inertia[i]) * b
-        wm = 0.5 * (w_old + w_new)
-        damp += damping * inertia[i] * wm * wm * dt
-        wf += torque[i] * wm * dt
-        omega[i] = w_new
-        theta[i] += dt * w_new
-        ke += 0.5 * inertia[i] * w_new * w_new
-    energy[0] = ke
-    energy[1] += wg
-    energy[2] += damp
-    energy[3] += wf
-
-
-@njit(cache=True)
-def _gravity(f, torque, m, g):
-    """f = m g [N], torque = 0."""
-    for i in range(f.shape[0]):
-        f[i, 0] = m[i] * g[0]
-        f[i, 1] = m[i] * g[1]
-        torque[i] = 0.0
-
-
-class Disks:
+class Disks(Interaction):
     """A set of rigid disks (see the module docstring).
 
     Args:
@@ -158,6 +118,10 @@ class Disks:
             Hertz stiffness in the stable time step (default 0.02).
         comm: MPI communicator (all ranks hold all disks).
     """
+
+    name = "disks"
+    state_attributes = ("x", "theta", "v", "omega", "fixed", "pairs", "hist", "work",
+                        "rebuilds")
 
     def __init__(
         self,
@@ -206,10 +170,12 @@ class Disks:
         self.theta = np.zeros(self.n)
         self.v = np.zeros((self.n, 2))
         self.omega = np.zeros(self.n)
-        self.f = np.zeros((self.n, 2))
-        self.torque = np.zeros(self.n)
+        self.f = np.zeros((self.n, 2))  # contact forces [N] of the last evaluation
+        self.torque = np.zeros(self.n)  # contact torques [N m]
         self.fixed = np.zeros(self.n, dtype=np.int8)
+        self._fixed_xy = np.zeros(2 * self.n, dtype=np.int8)
         self.g = np.zeros(2)
+        self._weight = np.zeros((self.n, 2))  # m g [N]
         self.props = np.array([materials[n].row() for n in self.names])
         self.table = DK.pair_table(self.props)
         self.margin = 0.2 * float(r.min()) if margin is None else float(margin)
@@ -221,19 +187,25 @@ class Disks:
         self._x_ref = self.x.copy()
         self.rebuilds = 0
         self.work = np.zeros(DK.N_WORK)
-        self.energy = np.zeros(N_DENERGY)
-        self.kinetic0 = 0.0
-        self.couplings: list = []
-        self._rebuild()
+        self._rebuild(self.x)
+        self._committed = (self.pairs.copy(), self.hist.copy())
+        self._dofsets = (
+            DofSet("disks", self.x.reshape(-1), self.v.reshape(-1), np.repeat(self.m, 2),
+                   self.f.reshape(-1), f_ext=self._weight.reshape(-1), presc=self._fixed_xy),
+            DofSet("disk_rotations", self.theta, self.omega, self.inertia, self.torque,
+                   presc=self.fixed),
+        )
 
     # ------------------------------------------------------------------ set-up
     def add_gravity(self, g: Sequence[float] = (0.0, -G)) -> None:
         """Gravity acceleration g [m/s²] on every disk."""
         self.g[:] = np.asarray(g, dtype=float)
+        self._weight[:] = self.m[:, None] * self.g[None, :]
 
     def fix(self, sel: np.ndarray) -> None:
         """Hold the selected disks (boolean mask or indices) in place."""
         self.fixed[np.asarray(sel)] = 1
+        self._fixed_xy[:] = np.repeat(self.fixed, 2)
 
     @property
     def weight(self) -> float:
@@ -246,7 +218,7 @@ class Disks:
                      + 0.5 * (self.inertia * self.omega**2).sum())
 
     # ------------------------------------------------------------------ time step
-    def stable_omega2(self, contacts: int = 6) -> float:
+    def stable_omega2(self, contacts: int = 6) -> dict[str, float]:
         """Bound of ω² [1/s²] of the disk contacts: ``contacts`` (at most per disk) times the
         largest single-contact bound over material pairs, disk–disk and disk–wall, for the
         smallest disk at the overlap ``max_overlap · r_min`` (:func:`pair_omega2` on the
@@ -267,39 +239,63 @@ class Disks:
                                               t[DK.T_REST])
                 w2 = max(w2, DK.pair_omega2(kw, t[DK.T_KAPPA], t[DK.T_MU_ROLL], rmin, rmin,
                                             m, 1e300, inertia, 1e300))
-        return contacts * w2
+        return {"disks": contacts * w2}
 
-    # ------------------------------------------------------------------ per step
-    def _rebuild(self) -> None:
-        pairs = DK.disk_pairs_cell_list(self.x, self.r, self.margin)
+    def add_rowsum(self, rows) -> None:
+        """The stiffest spring a disk can feel, ω² m_min [N/m], on every translation, and
+        times r² on every rotation (dynamic relaxation's fictitious masses)."""
+        add_disk_rowsum(rows, self.stable_omega2()["disks"] * float(self.m.min()), self.r)
+
+    # ------------------------------------------------------------------ interaction
+    def dofsets(self) -> tuple[DofSet, ...]:
+        """Centres (x, y per disk) and rotations, with weights m g as applied forces."""
+        return self._dofsets
+
+    def _rebuild(self, x: np.ndarray) -> None:
+        pairs = DK.disk_pairs_cell_list(x, self.r, self.margin)
         hist = np.zeros((pairs.shape[0], DK.N_HIST))
         DK.carry_history(self.pairs, self.hist, pairs, hist)
         self.pairs, self.hist = pairs, hist
-        self._x_ref[:] = self.x
+        self._x_ref[:] = x
         self.rebuilds += 1
 
-    def compute_forces(self, dt: float) -> None:
-        """Gravity and disk–disk contact forces at the current positions into f, torque
-        (block couplings add theirs afterwards)."""
-        if DK.max_move(self.x, self._x_ref) > 0.5 * self.margin:
-            self._rebuild()
-        _gravity(self.f, self.torque, self.m, self.g)
-        DK.disk_disk_forces(self.x, self.v, self.omega, self.r, self.mat, self.table,
-                            self.pairs, self.hist, self.width, dt, self.f, self.torque,
+    def update(self, state: State) -> None:
+        """Find the candidate pairs again once a disk has moved by half the margin."""
+        x = state.u["disks"].reshape(-1, 2)
+        if DK.max_move(x, self._x_ref) > 0.5 * self.margin:
+            self._rebuild(x)
+
+    def add_forces(self, state: State) -> None:
+        """Disk–disk contact forces and torques at the current positions."""
+        DK.disk_disk_forces(state.u["disks"].reshape(-1, 2), state.v["disks"].reshape(-1, 2),
+                            state.v["disk_rotations"], self.r, self.mat, self.table,
+                            self.pairs, self.hist, self.width, state.dt,
+                            state.f["disks"].reshape(-1, 2), state.f["disk_rotations"],
                             self.work)
 
-    def advance(self, dt: float, damping: float = 0.0) -> None:
-        """One central-difference step with the forces of :meth:`compute_forces`."""
-        disk_step(self.x, self.theta, self.v, self.omega, self.f, self.torque, self.m,
-                  self.inertia, self.fixed, self.g, damping, dt, self.energy)
-
-    def contact_energies(self) -> dict[str, float]:
-        """Disk–disk contact energies [J]: stored (normal, tangential, rolling) and
-        dissipated (restitution, friction, rolling friction)."""
+    def energies(self) -> dict[str, float]:
+        """Disk–disk contact energies [J] (every rank holds them all): stored (normal,
+        tangential, rolling) and dissipated (restitution, friction, rolling friction)."""
         w = self.work
-        return {"normal": float(w[DK.W_EN]), "tangential": float(w[DK.W_ET]),
+        stored = float(w[DK.W_EN] + w[DK.W_ET] + w[DK.W_ER])
+        lost = float(w[DK.W_HYST] + w[DK.W_FRIC] + w[DK.W_ROLL])
+        return {"stored": stored, "dissipated": lost,
+                "normal": float(w[DK.W_EN]), "tangential": float(w[DK.W_ET]),
                 "rolling": float(w[DK.W_ER]), "restitution_loss": float(w[DK.W_HYST]),
                 "friction_loss": float(w[DK.W_FRIC]), "rolling_loss": float(w[DK.W_ROLL])}
+
+    def commit(self) -> None:
+        """Keep the pairs' tangential and rolling history for :meth:`restore`."""
+        self._committed = commit_history(self._committed, self.pairs, self.hist)
+
+    def restore(self) -> None:
+        """Back to the committed pairs and history."""
+        self.pairs, self.hist = (a.copy() for a in self._committed)
+
+    def _state_changed(self) -> None:
+        self._fixed_xy[:] = np.repeat(self.fixed, 2)
+        self._x_ref[:] = self.x
+        self.commit()
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> None:
@@ -327,7 +323,7 @@ class Disks:
         disks.theta[:] = data["theta"]
         disks.v[:] = data["v"]
         disks.omega[:] = data["omega"]
-        disks.fixed[:] = data["fixed"]
+        disks.fix(np.asarray(data["fixed"]) > 0)
         return disks
 
     def __repr__(self) -> str:

@@ -43,8 +43,9 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.interactions.joints import _kernels as JK
 from masonry_fdem.geometry.blockmesh import unit_name
+from masonry_fdem.interactions.joints import _kernels as JK
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 
 __all__ = ["JointMaterial", "Joints", "JOINT_STATES"]
 
@@ -192,7 +193,7 @@ def coincident_facets(x: np.ndarray, facets: np.ndarray, facet_block: np.ndarray
     return np.c_[a[ok], b[ok], lo[ok], hi[ok]]
 
 
-class Joints:
+class Joints(Interaction):
     """The bonded joints of a model (collective constructor).
 
     Args:
@@ -211,7 +212,13 @@ class Joints:
 
     Raises:
         ValueError: two blocks touch along a facet and no joint material is given for them.
+
+    An :class:`~masonry_fdem.interactions.protocol.Interaction`: forces are trial states
+    from the committed one; ``commit`` accepts them (``restore`` has nothing to undo).
     """
+
+    name = "joints"
+    state_attributes = ("s0", "s1", "alive", "released", "n_commits", "energy")
 
     def __init__(
         self,
@@ -413,26 +420,24 @@ class Joints:
                              self.g_mat, self.props, alive, k)
         return k[m.node_input]
 
-    def stable_omega2(self) -> float:
+    def stable_omega2(self) -> dict[str, float]:
         """Gerschgorin bound of the ω² [1/s²] the joint springs add (collective)."""
         m = self.model
         rowsum = 2.0 * math.sqrt(2.0) * self._local_node_bound()
         mask, _ = m.prescribed_arrays(0.0)
         free = (mask[0::2] == 0) | (mask[1::2] == 0)
         w2 = rowsum[free] / m.mass[0::2][free] if free.any() else np.zeros(1)
-        return self.comm.allreduce(float(w2.max()) if w2.size else 0.0, op=MPI.MAX)
+        return {BLOCKS: self.comm.allreduce(float(w2.max()) if w2.size else 0.0, op=MPI.MAX)}
 
-    def stiffness_rowsum(self) -> np.ndarray:
-        """(2 n_nodes,) bound of Σ_j |K_ij| [N/m] of the joint springs."""
-        return np.repeat(2.0 * math.sqrt(2.0) * self._local_node_bound(), 2)
+    def add_rowsum(self, rows) -> None:
+        """Bound of Σ_j |K_ij| [N/m] of the joint springs into the block rows."""
+        rows[BLOCKS] += np.repeat(2.0 * math.sqrt(2.0) * self._local_node_bound(), 2)
 
-    def update_neighbours(self, v: np.ndarray, dt: float) -> None:
-        """Nothing to do: joints keep their partners."""
-
-    def add_forces(self, f: np.ndarray, v: np.ndarray, dt: float, damping: bool = True) -> None:
+    def add_forces(self, state: State) -> None:
         """Add the joint forces [N] at the current displacement (trial state; collective)."""
+        f = state.f[BLOCKS]
         nloc = 2 * self.n_local_nodes
-        self.u[:nloc] = self.model.u.x.array[:nloc]
+        self.u[:nloc] = state.u[BLOCKS][:nloc]
         if self.exchange is not None:
             self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
             self.u[nloc:] = self._ghost_u.ravel()
@@ -482,20 +487,22 @@ class Joints:
         c = self.contact
         if c is None:
             return
-        c.excluded = np.sort(self.seg_key[~self.released])
         bonded = np.zeros(self.model.blocks.n_blocks, dtype=bool)
         bonded[self.seg_blocks.ravel()] = True
         bonded[self.seg_blocks[self.released].ravel()] = False
         bonded[self.dry_blocks] = False
-        c.bonded_block = bonded
-        c.since = c.settings.rebuild_every  # rebuild before the next step
+        c.exclude(self.seg_key[~self.released], bonded)
 
     # ------------------------------------------------------------------ results
     def energies(self) -> dict[str, float]:
         """Elastic energy stored in the joints and energy dissipated by them [J]."""
-        c = self.comm
-        return {"joint_elastic": c.allreduce(float(self.energy[JK.E_ELASTIC])),
-                "joint_dissipated": c.allreduce(float(self.energy[JK.E_DISSIPATED]))}
+        el, dis = self.comm.allreduce(np.array([self.energy[JK.E_ELASTIC],
+                                                self.energy[JK.E_DISSIPATED]]))
+        return {"stored": float(el), "dissipated": float(dis), "joint_elastic": float(el),
+                "joint_dissipated": float(dis)}
+
+    def _state_changed(self) -> None:
+        self._tell_contact()
 
     def _gather(self, cols) -> np.ndarray:
         """(n_points, len(cols)) committed state columns on every rank, global order."""
