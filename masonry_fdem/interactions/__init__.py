@@ -44,3 +44,11 @@ __all__ = [
     "query_adt", "restitution_damping_ratio", "self_pairs", "spatial_order",
     "straight_anchor", "wall_ties",
 ]
+
+
+def precompile() -> None:
+    """Compile and cache the kernels of every interaction."""
+    from masonry_fdem.interactions import anchors, contact, disks, joints, search
+
+    for package in (search, contact, joints, disks, anchors):
+        package.precompile()

@@ -4,3 +4,10 @@ prescribed motions."""
 from masonry_fdem.model.model import Model, Prescription
 
 __all__ = ["Model", "Prescription"]
+
+
+def precompile() -> None:
+    """Compile and cache the model's kernels."""
+    from masonry_fdem.model import _kernels
+
+    _kernels.precompile()

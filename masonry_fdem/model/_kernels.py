@@ -63,3 +63,14 @@ def p1_element_bounds(xy, cells, lam, mu, rho, width, omega2, rowsum):
                 for j in range(6):
                     s += abs(K[2 * k + a, j])
                 rowsum[2 * node + a] += s
+
+
+def precompile() -> None:
+    """Compile this module's kernels on tiny arrays of the production dtypes."""
+    n = 6
+    gather_to(np.zeros(n), np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
+              np.zeros(n))
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    one = np.ones(1)
+    p1_element_bounds(xy, np.array([[0, 1, 2]], dtype=np.int64), one, one, one, 1.0,
+                      np.zeros(1), np.zeros(n))

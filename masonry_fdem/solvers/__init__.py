@@ -11,3 +11,10 @@ __all__ = [
     "ExplicitSolver",
     "UnstableTimeStepError",
 ]
+
+
+def precompile() -> None:
+    """Compile and cache the integrators' kernels."""
+    from masonry_fdem.solvers import _kernels
+
+    _kernels.precompile()

@@ -135,3 +135,15 @@ def dr_update(u, v, f_int, f_ext, mfict, presc, c, dt, first):
             vn = ((2.0 - c * dt) * v[i] + 2.0 * dt * r / mfict[i]) / (2.0 + c * dt)
         v[i] = vn
         u[i] += dt * vn
+
+
+def precompile() -> None:
+    """Compile this module's kernels on tiny arrays of the production dtypes."""
+    n = 6
+    u, v, f, m = np.zeros(n), np.zeros(n), np.zeros(n), np.ones(n)
+    mask = np.zeros(n, dtype=np.int8)
+    central_difference_step(u, v, f, f, f, m, m, mask, v, 0.0, 1e-3, f.copy(),
+                            np.zeros(N_ENERGY), np.zeros(n))
+    dr_measure(u, u, v, f, f, f, m, mask, np.zeros(4))
+    dr_update(u, v, f, f, m, mask, 0.0, 1.0, True)
+    dr_velocity_quotient(v, f, f.copy(), m, mask, True, np.zeros(6)[4:])

@@ -12,3 +12,10 @@ from masonry_fdem.interactions.anchors.anchors import (
 
 __all__ = ["Anchor", "Anchors", "BondLaw", "DowelLaw", "SteelLaw", "straight_anchor",
            "wall_ties"]
+
+
+def precompile() -> None:
+    """Compile and cache the anchor kernels."""
+    from masonry_fdem.interactions.anchors import _kernels
+
+    _kernels.precompile()

@@ -272,3 +272,26 @@ def relative_displacements(ua, ub, hnode, hosts, hw, d):
         relative_displacement(ua, ub, hnode, hosts, hw, h, tmp)
         d[h, 0] = tmp[0]
         d[h, 1] = tmp[1]
+
+
+def precompile() -> None:
+    """Compile the bar and bond kernels on one bar element in one triangle."""
+    xa = np.array([[0.0, 0.5], [0.5, 0.5]])
+    ua = np.zeros(4)
+    ub = np.zeros(8)
+    conn = np.array([[0, 1]], dtype=np.int64)
+    ep = np.ones((1, N_EP))
+    es = np.zeros((1, N_ES))
+    bar_forces(xa, ua, conn, np.full(1, 0.5), ep, np.zeros(1, np.int8), es, es.copy(),
+               np.zeros(1), np.zeros(1), np.zeros(4))
+    hn = np.array([0, 1], dtype=np.int64)
+    he = np.zeros(2, dtype=np.int64)
+    hosts = np.array([[0, 1, 2], [-1, -1, -1]], dtype=np.int64)
+    hw = np.full((2, 3), 1.0 / 3.0)
+    npr = np.ones((2, N_NP))
+    npr[:, NP_LAW] = 0.0
+    ns = np.zeros((2, N_NS))
+    bond_forces(xa, ua, ub, conn, hn, he, hosts, hw, npr, np.ones((1, 1)), np.ones((1, 1)),
+                np.ones(1, dtype=np.int64), np.ones(1), np.zeros((2, 2)), ns, ns.copy(),
+                np.zeros((2, N_NO)), np.zeros(4), np.zeros(8))
+    relative_displacements(ua, ub, hn, hosts, hw, np.zeros((2, 2)))

@@ -7,3 +7,10 @@ from masonry_fdem.interactions.contact.penalty import (
 )
 
 __all__ = ["BlockContact", "ContactSettings", "restitution_damping_ratio"]
+
+
+def precompile() -> None:
+    """Compile and cache the contact kernels."""
+    from masonry_fdem.interactions.contact import _kernels
+
+    _kernels.precompile()

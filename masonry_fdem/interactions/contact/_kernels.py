@@ -25,6 +25,7 @@ perfectly elastic.
 
 import math
 
+import numpy as np
 from numba import njit
 
 GAUSS = 0.5 / math.sqrt(3.0)
@@ -283,3 +284,16 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, h
     energy[0] = e_n
     energy[1] = e_t
     energy[2] = d_f
+
+
+def precompile() -> None:
+    """Compile the facet–facet kernel on a unit square facing itself."""
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    u = np.zeros(8)
+    facets = np.array([[0, 1], [1, 2], [2, 3], [3, 0]], dtype=np.int64)
+    fnext = np.array([1, 2, 3, 0], dtype=np.int64)
+    fprev = np.array([3, 0, 1, 2], dtype=np.int64)
+    p1 = np.ones(1)
+    facet_facet_forces(X, u, u, facets, fprev, fnext, np.array([[0, 2]], dtype=np.int64), p1,
+                       p1, p1, p1, p1, 1.0, 1e-3, np.zeros((1, 2)), np.zeros((1, 2)),
+                       np.zeros(8), np.zeros(3), np.zeros(N_WORK))

@@ -6,3 +6,27 @@ from masonry_fdem.interactions.disks.disks import DiskMaterial, Disks
 from masonry_fdem.interactions.disks.packing import pack_disks, spatial_order
 
 __all__ = ["DiskBlockContact", "DiskMaterial", "Disks", "pack_disks", "spatial_order"]
+
+
+def precompile() -> None:
+    """Compile and cache the disk kernels: a small set stepped through the protocol, the
+    disk–facet kernel, the packer."""
+    import numpy as np
+    from mpi4py import MPI
+
+    from masonry_fdem.interactions.disks import _facet_kernels, _kernels
+    from masonry_fdem.interactions.protocol import State
+
+    mat = DiskMaterial(density=1.0, E=1e6, nu=0.2, rolling_friction=0.1)
+    d = Disks(np.array([[0.0, 0.0], [1.9, 0.0], [9.0, 9.0]]), np.ones(3), {"d": mat}, "d",
+              comm=MPI.COMM_SELF)
+    sets = d.dofsets()
+    st = State({s.name: s.u for s in sets}, {s.name: s.v for s in sets},
+               {s.name: s.f for s in sets}, 1e-3, True)
+    d.update(st)
+    d.add_forces(st)
+    _kernels.brute_force_disk_pairs(d.x, d.r, 0.1)
+    _kernels.hertz_force(1.0, 0.5, 0.1, 0.2)
+    _kernels.max_node_move(np.zeros(8), np.zeros(8), np.arange(4, dtype=np.int64))
+    _facet_kernels.precompile()
+    pack_disks(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), 0.1, 0.15, 0.5)

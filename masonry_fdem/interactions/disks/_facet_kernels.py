@@ -882,3 +882,20 @@ def stable_time_step(mass, r, eps_a, width, kt):
     if k <= 0.0:
         return math.inf
     return 2.0 * math.sqrt(mass / k)
+
+
+def precompile() -> None:
+    """Compile the disk–facet kernel on a disk resting on a unit square."""
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    u = np.zeros(8)
+    facets = np.array([[0, 1], [1, 2], [2, 3], [3, 0]], dtype=np.int64)
+    fnext = np.array([1, 2, 3, 0], dtype=np.int64)
+    fprev = np.array([3, 0, 1, 2], dtype=np.int64)
+    prm = np.zeros((1, N_PARAM))
+    prm[0, [P_EPS_A, P_WIDTH, P_KT, P_MU, P_CN]] = [1e6, 1.0, 1e3, 0.5, 1.0]
+    disk_block_forces(X, u, u, facets, fprev, fnext, np.array([[0.5, 1.05]]),
+                      np.zeros((1, 2)), np.zeros(1), np.full(1, 0.1),
+                      np.array([[0, 0]], dtype=np.int64), np.array([0, 4], dtype=np.int64),
+                      np.arange(4, dtype=np.int64), prm, np.zeros((1, N_HIST)), 1e-3,
+                      np.zeros(8), np.zeros((1, 2)), np.zeros(1), np.zeros(N_WORK),
+                      np.zeros((1, N_OUT)), np.zeros((4, N_PART)))

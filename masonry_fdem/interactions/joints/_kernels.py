@@ -390,3 +390,24 @@ def node_spring_bound(ipa, ipb, xia, xib, w, ipmat, props, alive, k):
 
 def empty_state(m: int) -> np.ndarray:
     return np.zeros((m, N_STATE))
+
+
+def precompile() -> None:
+    """Compile the joint kernels on one integration-point pair."""
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    u = np.zeros(8)
+    props = np.zeros((1, N_PROPS))
+    props[0, [P_FT, P_GF1, P_C, P_GF2, P_FC, P_KP, P_GFC]] = 1.0
+    props[0, [P_KN, P_KS]] = 10.0
+    ip = np.array([[0, 1]], dtype=np.int64)
+    half = np.full(1, 0.5)
+    s0 = empty_state(1)
+    s1 = empty_state(1)
+    alive = np.ones(1, dtype=np.int8)
+    joint_forces(X, u, ip, ip[:, ::-1].copy(), half, half, half, np.zeros(1, np.int64),
+                 props, alive, s0, s1, np.zeros(8), np.zeros(2))
+    commit(alive, s0, s1)
+    node_spring_bound(ip, ip, half, half, half, np.zeros(1, np.int64), props, alive,
+                      np.zeros(4))
+    interface_law(props[0], 2.0, 1.0, s0[0], s1[0])
+    interface_law(props[0], -2.0, 0.5, s0[0], s1[0])

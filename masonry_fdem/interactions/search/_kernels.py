@@ -454,3 +454,11 @@ def max_speed(v):
         if s > best:
             best = s
     return math.sqrt(best)
+
+
+def precompile() -> None:
+    """Compile the box and speed kernels (the tree's are compiled by a search)."""
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    facets = np.array([[0, 1], [1, 2], [2, 3], [3, 0]], dtype=np.int64)
+    facet_boxes(X, np.zeros(8), facets, 0.1, np.zeros((4, 4)))
+    max_speed(np.zeros(8))
