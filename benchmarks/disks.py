@@ -14,7 +14,7 @@ by decreasing radius at random places); LAMMPS sorts its atoms spatially at setu
 every 1000 steps), ours keeps the order it is given, so ``--shuffle`` shows what the
 memory order costs us.
 
-What is timed. Ours: only the stepping loop ``compute_forces(dt); advance(dt)`` on a
+What is timed. Ours: only the stepping loop of the package's ``ExplicitSolver`` on a
 fresh ``Disks`` object (construction, the first pair search and numba compilation are
 outside the timed loop; numba is warmed up on a small set first). LAMMPS: only its
 ``run`` (the "Loop time of ..." it prints), on the same positions, radii, masses
@@ -28,7 +28,7 @@ N · steps / time. Two modes each:
   jammed packing the disks vibrate by less than half the margin, so neither code
   rebuilds during the run (the table prints the counts): this mode times the travel
   check, the contact forces and the update;
-* rebuilding every step: ours calls ``Disks._rebuild()`` before every step (same margin;
+* rebuilding every step: ours calls ``Disks.rebuild()`` before every step (same margin;
   the cell list, the sorted pair list and the carried history are rebuilt); LAMMPS
   ``neigh_modify delay 0 every 1 check no``.
 
@@ -82,7 +82,11 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.interactions.disks import _kernels as DK
+from masonry_fdem import Material, Model
+from masonry_fdem.geometry import mesh_blocks, rectangle
 from masonry_fdem.interactions.disks import DiskMaterial, Disks
+from masonry_fdem.interactions.protocol import State
+from masonry_fdem.solvers import ExplicitSolver
 
 R0 = 0.01  # mean radius [m]
 POLY = 0.01  # radii r0 (1 ± POLY)
@@ -170,20 +174,30 @@ class Result:
     contacts_per_disk: float
 
 
-def run_ours(p: Packing, steps: int, every_step: bool) -> Result:
+def stepper(p: Packing) -> tuple[Disks, ExplicitSolver]:
+    """Fresh disks and the package's explicit solver advancing them (with a small fixed
+    block far away: the solver advances a model of blocks)."""
     d = make_disks(p)
-    dt = p.dt
+    lo = p.x.min(axis=0) - 10.0 * R0
+    blocks = mesh_blocks([rectangle(lo[0] - R0, lo[1] - R0, lo[0], lo[1])], materials="b",
+                         mesh_size=R0, comm=MPI.COMM_SELF)
+    model = Model(blocks, {"b": Material(density=2600.0, E=1e9, nu=0.25)}, width=WIDTH,
+                  comm=MPI.COMM_SELF)
+    model.fix_blocks(0)
+    return d, ExplicitSolver(model, dt=p.dt, interactions=d)
+
+
+def run_ours(p: Packing, steps: int, every_step: bool) -> Result:
+    d, s = stepper(p)
     rebuilds0 = d.rebuilds
     t0 = time.perf_counter()
     if every_step:
         for _ in range(steps):
-            d._rebuild()
-            d.compute_forces(dt)
-            d.advance(dt)
+            d.rebuild()
+            s.step()
     else:
         for _ in range(steps):
-            d.compute_forces(dt)
-            d.advance(dt)
+            s.step()
     seconds = time.perf_counter() - t0
     if not np.all(np.isfinite(d.x)):
         raise RuntimeError("our disks blew up (non-finite positions)")
@@ -192,24 +206,29 @@ def run_ours(p: Packing, steps: int, every_step: bool) -> Result:
 
 
 def profile_ours(p: Packing, steps: int) -> dict[str, float]:
-    """Seconds per step of each part of a step that rebuilds every step."""
-    d = make_disks(p)
-    dt = p.dt
+    """Seconds per step of each part of a step that rebuilds every step ("forces": the
+    disks' travel check and pair forces through the interaction protocol; "advance": the
+    rest of the solver's step, the central-difference update above all)."""
+    d, s = stepper(p)
+    sets = d.dofsets()
+    st = State({k.name: k.u for k in sets}, {k.name: k.v for k in sets},
+               {k.name: np.zeros_like(k.u) for k in sets}, p.dt, True)
     t = dict.fromkeys(("cell list", "history carry", "forces", "advance"), 0.0)
     for _ in range(steps):
         t0 = time.perf_counter()
         DK.disk_pairs_cell_list(d.x, d.r, d.margin)  # the search alone
         t1 = time.perf_counter()
-        d._rebuild()  # search + carried history
+        d.rebuild()  # search + carried history
         t2 = time.perf_counter()
-        d.compute_forces(dt)  # travel check + gravity + pair forces
+        d.update(st)  # travel check + pair forces
+        d.add_forces(st)
         t3 = time.perf_counter()
-        d.advance(dt)
+        s.step()  # forces again, and the update
         t4 = time.perf_counter()
         t["cell list"] += t1 - t0
         t["history carry"] += max((t2 - t1) - (t1 - t0), 0.0)
         t["forces"] += t3 - t2
-        t["advance"] += t4 - t3
+        t["advance"] += max((t4 - t3) - (t3 - t2), 0.0)
     return {k: s / steps for k, s in t.items()}
 
 

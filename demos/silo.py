@@ -73,10 +73,10 @@ def main() -> None:
     x, r = pack_disks(fill, 0.8 * r0, 1.2 * r0, 0.35, seed=7)
     disks = Disks(x, r, {"grain": GRAIN}, "grain", width=W, comm=comm)
     disks.add_gravity()
-    DiskBlockContact(disks, model, damping_ratio=0.3)
+    coupling = DiskBlockContact(disks, model, damping_ratio=0.3)
     gate = model.prescribe_velocity("gate", lambda t: (0.0, 0.0), name="gate")
     # 1. settle on the closed gate (damped)
-    s = ExplicitSolver(model, interactions=disks, damping=10.0)
+    s = ExplicitSolver(model, interactions=[disks, coupling], damping=10.0)
     s.run(t_end=0.25, every=2000)
     # 2. open: the gate slides aside at 2 m/s; flow undamped
     t_open = s.t

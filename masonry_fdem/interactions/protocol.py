@@ -19,7 +19,11 @@ Calls a solver makes, and when:
   step, a DR iteration): neighbour lists for the current positions (collective), then
   its forces added into ``state.f`` (collective where it exchanges between ranks);
 * ``commit()`` — when the state is accepted (every explicit step, a converged DR
-  increment); ``restore()`` — back to the last commit (a failed increment);
+  increment): a provider that keeps a trial state apart from its committed one (joints,
+  anchors) accepts it; ``restore()`` — drop the trial state, back to the last commit.
+  History that evolves in place (the friction springs of contact and disks) needs
+  neither; a solver that may undo a whole increment (dynamic relaxation's load to
+  collapse) takes ``state()`` before it and gives it back with ``set_state()``;
 * ``energies()`` — its energies [J], global over ranks (collective): ``"stored"``
   (elastic energy held now) and ``"dissipated"`` (since the start), plus any details;
 * ``state()`` / ``set_state(s)`` — its complete state as named arrays (checkpoints);

@@ -33,7 +33,8 @@ velocity quotient is taken over the block dofs, which carry the structure's lowe
 Load increments scale the live loads; an increment that does not converge within
 ``max_iter`` iterations is reported as not in equilibrium (collapse in a load-to-collapse run).
 History (material state of the blocks, every interaction's) is committed only when an
-increment converges; a failed increment is undone by :meth:`DynamicRelaxation.restore`.
+increment converges; a failed increment is undone by :meth:`DynamicRelaxation.restore` of
+the :meth:`DynamicRelaxation.snapshot` taken before it (every interaction's full state).
 """
 
 from __future__ import annotations
@@ -324,17 +325,18 @@ class DynamicRelaxation:
         for s in self.sets[1:]:
             np.negative(s.f, out=s.res)
 
-    def snapshot(self) -> dict[str, np.ndarray]:
-        """The unknowns of every dof set (copies), for :meth:`restore`."""
-        return {s.name: s.u.copy() for s in self.sets}
+    def snapshot(self) -> dict:
+        """The unknowns of every dof set and every interaction's state (copies), for
+        :meth:`restore`."""
+        return {"dofs": {s.name: s.u.copy() for s in self.sets},
+                "interactions": [c.state() for c in self.interactions]}
 
-    def restore(self, snap: Mapping[str, np.ndarray]) -> None:
-        """Back to a :meth:`snapshot` and to every interaction's committed state
-        (collective: contact neighbour lists are rebuilt)."""
+    def restore(self, snap: Mapping) -> None:
+        """Back to a :meth:`snapshot` (collective: contact neighbour lists are rebuilt)."""
         for s in self.sets:
-            s.u[:] = snap[s.name]
-        for c in self.interactions:
-            c.restore()
+            s.u[:] = snap["dofs"][s.name]
+        for c, st in zip(self.interactions, snap["interactions"], strict=True):
+            c.set_state(st)
 
     def load_to_collapse(
         self,

@@ -108,9 +108,10 @@ class BlockContact(Interaction):
         model: the :class:`~masonry_fdem.model.Model`.
         settings: contact settings.
 
-    An :class:`~masonry_fdem.interactions.protocol.Interaction`: its history is the
-    tangential spring and the largest penetration of every pair, by pair key; ``commit``
-    keeps a copy that ``restore`` brings back (the candidate list is then rebuilt).
+    An :class:`~masonry_fdem.interactions.protocol.Interaction`: its history, the
+    tangential spring and the largest penetration of every pair by pair key, evolves in
+    place (``commit`` and ``restore`` have nothing to do); ``set_state`` brings a saved
+    one back and finds the candidates again.
     """
 
     name = "contact"
@@ -179,7 +180,6 @@ class BlockContact(Interaction):
         self.since = 0
         self.rebuilds = 0
         self.exchange = None
-        self._committed = (self.keys.copy(), self.tau.copy(), self.pmax.copy())
         self._build_extended(np.zeros(0, dtype=np.int64), [np.zeros(0, np.int64)] * comm.size)
 
     # ------------------------------------------------------------------ extended arrays
@@ -413,23 +413,7 @@ class BlockContact(Interaction):
         return {"stored": float(n + t), "dissipated": float(d), "contact_normal": float(n),
                 "contact_tangential": float(t), "friction_dissipated": float(d)}
 
-    def commit(self) -> None:
-        """Keep the pairs' tangential history as the one :meth:`restore` returns to."""
-        keys, tau, pmax = self._committed
-        if keys.shape != self.keys.shape:
-            self._committed = (self.keys.copy(), self.tau.copy(), self.pmax.copy())
-            return
-        np.copyto(keys, self.keys)
-        np.copyto(tau, self.tau)
-        np.copyto(pmax, self.pmax)
-
-    def restore(self) -> None:
-        """Back to the committed history; candidates found again at rest (collective)."""
-        self.keys, self.tau, self.pmax = (a.copy() for a in self._committed)
-        self.rebuild(np.zeros_like(self.model.v))
-
     def _state_changed(self) -> None:
-        self.commit()
         self.rebuild(np.zeros_like(self.model.v))
 
     def exclude(self, keys: np.ndarray, bonded_block: np.ndarray) -> None:

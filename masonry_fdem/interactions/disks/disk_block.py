@@ -24,7 +24,7 @@ from numba import njit
 
 from masonry_fdem.interactions.disks import _facet_kernels as DF
 from masonry_fdem.interactions.disks import _kernels as DK
-from masonry_fdem.interactions.disks.disks import add_disk_rowsum, commit_history
+from masonry_fdem.interactions.disks.disks import add_disk_rowsum
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.interactions.search import facet_boxes
 from masonry_fdem.interactions.search.adt import build_adt, query_adt
@@ -120,7 +120,6 @@ class DiskBlockContact(Interaction):
         self._sum = np.zeros(3 * disks.n)
         self.rebuilds = 0
         self._fresh = True
-        self._committed = (self.pairs.copy(), self.hist.copy())
 
     # ------------------------------------------------------------------ time step
     def stable_omega2(self) -> dict[str, float]:
@@ -232,16 +231,3 @@ class DiskBlockContact(Interaction):
         stored, lost = self.comm.allreduce(np.array(
             [self.work[DF.W_NORMAL] + self.work[DF.W_TANGENT], self.dissipated]))
         return {"stored": float(stored), "dissipated": float(lost)}
-
-    def commit(self) -> None:
-        """Keep the friction history for :meth:`restore`."""
-        self._committed = commit_history(self._committed, self.pairs, self.hist)
-
-    def restore(self) -> None:
-        """Back to the committed friction history (the candidates are found again)."""
-        pairs, hist = self._committed
-        self.pairs, self.hist = pairs.copy(), hist.copy()
-        self._fresh = True
-
-    def _state_changed(self) -> None:
-        self.commit()

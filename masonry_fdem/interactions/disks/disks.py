@@ -41,7 +41,7 @@ from masonry_fdem.constants import G
 from masonry_fdem.interactions.disks import _kernels as DK
 from masonry_fdem.interactions.protocol import DofSet, Interaction, State
 
-__all__ = ["DiskMaterial", "Disks", "add_disk_rowsum", "commit_history"]
+__all__ = ["DiskMaterial", "Disks", "add_disk_rowsum"]
 
 
 def add_disk_rowsum(rows, k: float, r: np.ndarray) -> None:
@@ -49,17 +49,6 @@ def add_disk_rowsum(rows, k: float, r: np.ndarray) -> None:
     rows["disks"] += k
     rows["disk_rotations"] += k * r * r
 
-
-def commit_history(committed: tuple[np.ndarray, np.ndarray], pairs: np.ndarray,
-                   hist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Copies of (pairs, history) for a later restore, into ``committed`` when the sizes
-    agree (no allocation in a time loop between neighbour-list rebuilds)."""
-    cp, ch = committed
-    if cp.shape != pairs.shape or ch.shape != hist.shape:
-        return pairs.copy(), hist.copy()
-    np.copyto(cp, pairs)
-    np.copyto(ch, hist)
-    return committed
 
 @dataclass(frozen=True)
 class DiskMaterial:
@@ -188,7 +177,6 @@ class Disks(Interaction):
         self.rebuilds = 0
         self.work = np.zeros(DK.N_WORK)
         self._rebuild(self.x)
-        self._committed = (self.pairs.copy(), self.hist.copy())
         self._dofsets = (
             DofSet("disks", self.x.reshape(-1), self.v.reshape(-1), np.repeat(self.m, 2),
                    self.f.reshape(-1), f_ext=self._weight.reshape(-1), presc=self._fixed_xy),
@@ -259,6 +247,10 @@ class Disks(Interaction):
         self._x_ref[:] = x
         self.rebuilds += 1
 
+    def rebuild(self) -> None:
+        """Find the candidate pairs again now, at the current centres (history carried)."""
+        self._rebuild(self.x)
+
     def update(self, state: State) -> None:
         """Find the candidate pairs again once a disk has moved by half the margin."""
         x = state.u["disks"].reshape(-1, 2)
@@ -284,18 +276,9 @@ class Disks(Interaction):
                 "rolling": float(w[DK.W_ER]), "restitution_loss": float(w[DK.W_HYST]),
                 "friction_loss": float(w[DK.W_FRIC]), "rolling_loss": float(w[DK.W_ROLL])}
 
-    def commit(self) -> None:
-        """Keep the pairs' tangential and rolling history for :meth:`restore`."""
-        self._committed = commit_history(self._committed, self.pairs, self.hist)
-
-    def restore(self) -> None:
-        """Back to the committed pairs and history."""
-        self.pairs, self.hist = (a.copy() for a in self._committed)
-
     def _state_changed(self) -> None:
         self._fixed_xy[:] = np.repeat(self.fixed, 2)
         self._x_ref[:] = self.x
-        self.commit()
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> None:
