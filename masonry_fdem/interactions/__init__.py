@@ -6,38 +6,19 @@ Layers inside this package (lower ones never import higher ones): ``protocol`` a
 the solvers call nothing else.
 """
 
-from masonry_fdem.interactions.anchors import (
-    Anchor,
-    Anchors,
-    BondLaw,
-    DowelLaw,
-    SteelLaw,
-    straight_anchor,
-    wall_ties,
-)
-from masonry_fdem.interactions.contact import (
-    BlockContact,
-    ContactSettings,
-    restitution_damping_ratio,
-)
-from masonry_fdem.interactions.disks import (
-    DiskBlockContact,
-    DiskMaterial,
-    Disks,
-    pack_disks,
-    spatial_order,
-)
+from masonry_fdem.interactions.anchors import Anchor, Anchors, BondLaw, DowelLaw, SteelLaw
+from masonry_fdem.interactions.anchors import straight_anchor, wall_ties
+from masonry_fdem.interactions.contact import BlockContact, ContactSettings
+from masonry_fdem.interactions.contact import restitution_damping_ratio
+from masonry_fdem.interactions.disks import DiskBlockContact, DiskMaterial, Disks
+from masonry_fdem.interactions.disks import pack_disks, spatial_order
 from masonry_fdem.interactions.joints import JOINT_STATES, JointMaterial, Joints
-from masonry_fdem.interactions.search import (
-    ADTree,
-    brute_force_pairs,
-    build_adt,
-    inflate,
-    query_adt,
-    self_pairs,
-)
+from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction, State
+from masonry_fdem.interactions.search import ADTree, brute_force_pairs, build_adt
+from masonry_fdem.interactions.search import inflate, query_adt, self_pairs
 
 __all__ = [
+    "BLOCKS", "DofSet", "Interaction", "State",
     "ADTree", "Anchor", "Anchors", "BlockContact", "BondLaw", "ContactSettings",
     "DiskBlockContact", "DiskMaterial", "Disks", "DowelLaw", "JOINT_STATES", "JointMaterial",
     "Joints", "SteelLaw", "brute_force_pairs", "build_adt", "inflate", "pack_disks",

@@ -152,8 +152,11 @@ class ExplicitSolver:
         u = {s.name: s.u for s in self.sets}
         v = {s.name: s.v for s in self.sets}
         # each interaction adds into arrays of its own, so the work of its forces is known
-        self._states = [State(u, v, {s.name: np.zeros_like(s.u) for s in self.sets},
-                              self.dt, True) for _ in self.interactions]
+        # (a single one adds into the totals directly)
+        self._own = len(self.interactions) > 1
+        self._states = [State(u, v, {s.name: np.zeros_like(s.u) if self._own else s.f_con
+                                     for s in self.sets}, self.dt, True)
+                        for _ in self.interactions]
         self.work = np.zeros(len(self.interactions))
         self.names = _unique_names(self.interactions)
         if model.comm.rank == 0:
@@ -183,12 +186,14 @@ class ExplicitSolver:
         for s in self.sets:
             s.f_con.fill(0.0)
         for c, st in zip(self.interactions, self._states, strict=True):
-            for s in self.sets:
-                st.f[s.name].fill(0.0)
+            if self._own:
+                for s in self.sets:
+                    st.f[s.name].fill(0.0)
             c.update(st)
             c.add_forces(st)
-            for s in self.sets:
-                s.f_con += st.f[s.name]
+            if self._own:
+                for s in self.sets:
+                    s.f_con += st.f[s.name]
             c.commit()
         m.commit_state()
         for s in self.sets:

@@ -887,10 +887,9 @@ def stable_time_step(mass, r, eps_a, width, kt):
 def precompile() -> None:
     """Compile the disk–facet kernel on a disk resting on a unit square."""
     X = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    k = np.arange(4, dtype=np.int64)
+    facets, fnext, fprev = np.c_[k, (k + 1) % 4], (k + 1) % 4, (k + 3) % 4
     u = np.zeros(8)
-    facets = np.array([[0, 1], [1, 2], [2, 3], [3, 0]], dtype=np.int64)
-    fnext = np.array([1, 2, 3, 0], dtype=np.int64)
-    fprev = np.array([3, 0, 1, 2], dtype=np.int64)
     prm = np.zeros((1, N_PARAM))
     prm[0, [P_EPS_A, P_WIDTH, P_KT, P_MU, P_CN]] = [1e6, 1.0, 1e3, 0.5, 1.0]
     disk_block_forces(X, u, u, facets, fprev, fnext, np.array([[0.5, 1.05]]),
