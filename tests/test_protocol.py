@@ -187,3 +187,51 @@ def test_energy_account_includes_blocks_disks_and_anchors():
     assert e.external == pytest.approx(w_disks, rel=0.05)  # the fixed block's load does no work
     assert sorted(e.interactions) == ["anchors", "disk_block", "disks"]
     assert abs(e.balance) < 1e-9 * max(e.kinetic, e.external, 0.5 * disks.m.sum() * 0.04)
+
+
+def run_and_replay(solver, steps=150):
+    """Positions after ``steps`` explicit steps, from a saved state, twice: straight on,
+    and again after every interaction's set_state and the dof sets put back."""
+    saved = [(s.u.copy(), s.v.copy()) for s in solver.sets]
+    states = [c.state() for c in solver.interactions]
+    solver.run(steps=steps, every=steps)
+    first = [s.u.copy() for s in solver.sets]
+    for s, (u, v) in zip(solver.sets, saved, strict=True):
+        s.u[:] = u
+        s.v[:] = v
+    for c, st in zip(solver.interactions, states, strict=True):
+        c.set_state(st)
+    solver.run(steps=steps, every=steps)
+    return first, [s.u.copy() for s in solver.sets]
+
+
+def test_state_and_set_state_replay_a_run():
+    """Contact, disks, disk-block contact and anchors mid-run: taking every interaction's
+    state and giving it back replays the next steps (to round-off: the candidate lists are
+    found again at the restored positions)."""
+    comm = MPI.COMM_WORLD
+    blocks = mesh_blocks([rectangle(0.0, 0.0, 0.4, 0.1), rectangle(0.1, 0.1, 0.3, 0.2)],
+                         materials="stone", mesh_size=0.05, comm=comm)
+    model = Model(blocks, {"stone": STONE}, hypothesis="plane_stress", width=0.05, comm=comm)
+    model.fix_blocks(0, name="base")
+    model.add_gravity()
+    model.v[0::2] = np.where(model.node_block == 1, 0.3, 0.0)  # the top block slides
+    from masonry_fdem.interactions import BlockContact
+
+    x = np.c_[[0.1, 0.1235, 0.26, 0.36], np.full(4, 0.2121)]  # 3 on the top, 2 touching
+    disks = Disks(x, np.full(4, 0.012), {"g": DiskMaterial(density=2600.0, E=1e8, nu=0.25)},
+                  "g", width=0.05, comm=comm)
+    disks.add_gravity()
+    disks.v[:, 1] = -0.2
+    anchors = Anchors(model, [Anchor([[0.12, 0.15], [0.28, 0.15]], diameter=0.01)])
+    s = ExplicitSolver(model, interactions=[BlockContact(model), disks,
+                                            DiskBlockContact(disks, model), anchors])
+    s.run(steps=300, every=300)
+    first, again = run_and_replay(s)
+    e = s.energies().interactions
+    print({k: f"{v['work']:.2e} J" for k, v in e.items()}, f"dt {s.dt:.1e} s")
+    assert min(abs(v["work"]) for v in e.values()) > 0  # every one of them acted
+    worst = max(float(np.abs(a - b).max()) for a, b in zip(first, again, strict=True))
+    moved = max(float(np.abs(a).max()) for a in first)
+    print(f"\nreplay after set_state: largest difference {worst:.1e} m of {moved:.3e} m")
+    assert worst <= 1e-12 * moved

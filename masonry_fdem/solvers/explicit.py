@@ -157,7 +157,8 @@ class ExplicitSolver:
         self._states = [State(u, v, {s.name: np.zeros_like(s.u) if self._own else s.f_con
                                      for s in self.sets}, self.dt, True)
                         for _ in self.interactions]
-        self.work = np.zeros(len(self.interactions))
+        # work of each interaction's forces on the distributed and on the replicated sets
+        self.work = np.zeros((2, len(self.interactions)))
         self.names = _unique_names(self.interactions)
         if model.comm.rank == 0:
             log.info(
@@ -202,7 +203,7 @@ class ExplicitSolver:
                                       s.energy, s.du)
         for k, st in enumerate(self._states):
             for s in self.sets:
-                self.work[k] += np.dot(st.f[s.name], s.du)
+                self.work[int(s.replicated), k] += np.dot(st.f[s.name], s.du)
         self.t += self.dt
         self.n += 1
 
@@ -268,7 +269,7 @@ class ExplicitSolver:
             e[K.E_KINETIC] + e[K.E_INTERNAL] + e[K.E_DAMPING]
             - e[K.E_EXTERNAL] - e[K.E_SUPPORT] - e[K.E_CONTACT] - self.kinetic0
         )
-        work = comm.allreduce(self.work.copy())
+        work = comm.allreduce(self.work[0].copy()) + self.work[1]  # replicated: once
         per, held = {}, 0.0
         for name, c, w in zip(self.names, self.interactions, work, strict=True):
             en = dict(c.energies())
