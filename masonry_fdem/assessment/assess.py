@@ -160,8 +160,8 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
         abutments fixed, self-weight as a dead load), ``[BlockContact, Joints]`` and the
         :class:`~masonry_fdem.interactions.anchors.Anchors` (None without anchors).
     """
-    from masonry_fdem import Model
     from masonry_fdem.interactions.anchors import Anchors
+    from masonry_fdem.model import Model
     from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
 
     layout = case.mesh_layout()
@@ -463,8 +463,6 @@ def anchor_state(anchors) -> list[dict]:
     ``distance`` [m] of the bar nodes from the anchor's start, ``force`` [N per bar] of
     each bar element (tension positive), ``slip`` [m] at each node, ``force_max`` [N],
     ``slip_max`` [m], ``yield_force`` [N], ``yielded`` and ``ruptured`` element counts."""
-    from masonry_fdem.interactions.anchors import _kernels as AK
-
     nodes = anchors.node_results()
     force = anchors.axial_force()
     out = []
@@ -478,7 +476,7 @@ def anchor_state(anchors) -> list[dict]:
             "distance": dist.tolist(), "force": f.tolist(), "slip": slip.tolist(),
             "force_max": float(f.max()), "slip_max": float(np.abs(slip).max()),
             "yield_force": float(a.yield_force),
-            "yielded": int(np.count_nonzero(anchors.es[ee, AK.ES_ALPHA] > 0)),
+            "yielded": int(np.count_nonzero(anchors.yielded()[ee])),
             "ruptured": int(np.count_nonzero(anchors.ruptured()[ee])),
         })
     return out

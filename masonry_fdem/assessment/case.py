@@ -128,7 +128,7 @@ from masonry_fdem.assessment.layouts import inclined_anchors, intrados_stitch, r
 from masonry_fdem.constants import G
 from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
 from masonry_fdem.interactions.joints.joints import JointMaterial
-from masonry_fdem.geometry.arches import ArchKind, _ring_pieces, arch_layout
+from masonry_fdem.geometry.arches import ArchKind, ring_pieces, arch_layout
 from masonry_fdem.geometry.layout import BlockLayout
 from masonry_fdem.materials.elastic import Material
 
@@ -357,7 +357,7 @@ class ArchSpec:
 
     def joint_positions(self, ring: int) -> np.ndarray:
         """Positions s of the joints of ``ring``, springings included (n_blocks + 1)."""
-        pieces = _ring_pieces(self.voussoirs[ring], self.stagger * ring)
+        pieces = ring_pieces(self.voussoirs[ring], self.stagger * ring)
         return np.array([pieces[0][0], *(b for _, b in pieces)])
 
     def blocks_in_ring(self, ring: int) -> int:

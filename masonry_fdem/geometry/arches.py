@@ -46,7 +46,7 @@ import numpy as np
 from masonry_fdem.geometry.blockmesh import BlockMesh
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["ArchKind", "arch_circle", "arch_layout", "arch_curve", "build_arch"]
+__all__ = ["ArchKind", "arch_circle", "arch_layout", "arch_curve", "build_arch", "ring_pieces"]
 
 # parameters closer than this are the same vertex
 _S_TOL = 1e-10
@@ -149,8 +149,9 @@ def arch_curve(
     return pointed
 
 
-def _ring_pieces(n: int, shift: float) -> list[tuple[float, float]]:
-    """Parameter intervals of the voussoirs of a ring of ``n`` with joints shifted."""
+def ring_pieces(n: int, shift: float) -> list[tuple[float, float]]:
+    """Parameter intervals (s0, s1) in [0, 1] of the ``n`` voussoirs of a ring whose radial
+    joints are shifted by ``shift`` voussoirs (a staggered ring: one more piece)."""
     shift = shift % 1.0
     if shift < _S_TOL or shift > 1.0 - _S_TOL:
         joints = [j / n for j in range(1, n)]
@@ -226,7 +227,7 @@ def arch_layout(
     if segments < 1:
         raise ValueError(f"segments must be >= 1, got {segments}")
     t = float(ring_thickness)
-    pieces = [_ring_pieces(counts[k], stagger * k) for k in range(rings)]
+    pieces = [ring_pieces(counts[k], stagger * k) for k in range(rings)]
     params = [_piece_params(pieces[k], counts[k], segments) for k in range(rings)]
     crown = [np.array([0.5])] if kind is ArchKind.POINTED else []
     faces = [_merge(params[0], *crown)]

@@ -671,6 +671,10 @@ class Anchors(Interaction):
         """Committed plastic strain of each bar element."""
         return self.es[:, AK.ES_EPSP].copy()
 
+    def yielded(self) -> np.ndarray:
+        """Committed flag of each bar element: the steel has yielded."""
+        return self.es[:, AK.ES_ALPHA] > 0
+
     def ruptured(self) -> np.ndarray:
         """Committed rupture flag of each bar element."""
         return self.es[:, AK.ES_RUPT] > 0.5
@@ -712,7 +716,7 @@ class Anchors(Interaction):
         return {
             "anchor_force_max": float(np.max(self.axial_force())),
             "anchor_slip_max": float(np.max(np.abs(res["slip"]))),
-            "anchor_elements_yielded": float(np.count_nonzero(self.es[:, AK.ES_ALPHA] > 0)),
+            "anchor_elements_yielded": float(np.count_nonzero(self.yielded())),
             "anchor_elements_ruptured": float(np.count_nonzero(self.ruptured())),
         }
 
