@@ -21,7 +21,7 @@ import time
 from mpi4py import MPI
 
 from masonry_fdem.assessment.case import AnchorLayout, SearchSpec, load_case
-from masonry_fdem.assessment.repair import search
+from masonry_fdem.assessment.search import search
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
 ap.add_argument("--out", default="out_anchor_search")

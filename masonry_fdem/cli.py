@@ -120,7 +120,8 @@ def cmd_repair(args) -> int:
     from mpi4py import MPI
 
     from masonry_fdem.assessment.case import CaseError, load_case
-    from masonry_fdem.assessment.repair import SearchInterrupted, compare, search
+    from masonry_fdem.assessment.repair import compare
+    from masonry_fdem.assessment.search import SearchInterrupted, search
 
     comm = MPI.COMM_WORLD
     case = load_case(args.case)  # every problem of the file, before anything is written

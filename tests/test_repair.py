@@ -19,7 +19,8 @@ import pytest
 from masonry_fdem.assessment.assess import assess
 from masonry_fdem.assessment.case import AnchorLayout, CaseError, SearchSpec, load_case
 from masonry_fdem.cli import main as cli_main
-from masonry_fdem.assessment.repair import SearchInterrupted, compare, search
+from masonry_fdem.assessment.repair import compare
+from masonry_fdem.assessment.search import SearchInterrupted, search
 
 MATERIALS = {"brick": {"density": 2000.0, "E": 10e9, "nu": 0.2},
              "abutment": {"density": 2000.0, "E": 30e9, "nu": 0.2}}

@@ -36,13 +36,10 @@ case file. Units are SI: N, m.
 
 from __future__ import annotations
 
-import csv
-import json
 import math
-import shutil
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -50,15 +47,11 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.assessment.case import (
-    ArchCase,
-    CaseError,
-    LoadControl,
-    _arch_parameter,
-    _classify,
-    load_case,
-)
-from masonry_fdem.geometry.arches import ArchKind
+from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
+from masonry_fdem.assessment.specs import classify_interface
+from masonry_fdem.geometry.arches import ArchKind, arch_parameter
+from masonry_fdem.assessment.report import write_run_folder
+from masonry_fdem.io.rundir import run_folder_problem
 
 __all__ = ["Assessment", "JointEvent", "anchor_state", "assess", "build_model"]
 
@@ -198,7 +191,7 @@ class _JointMonitor:
         self.rows = []
         for i in range(itf.size):
             na, nb = layout.names[itf.block_a[i]], layout.names[itf.block_b[i]]
-            where = _classify(na, nb, case.arch)
+            where = classify_interface(na, nb, case.arch)
             if where is None or where[0] != "joint":
                 continue
             self.rows.append((i, f"ring {where[1]} joint {where[2]}", (na, nb),
@@ -273,7 +266,8 @@ class _JointMonitor:
             pos = self.ends[k, int(np.argmin(opening))]
         else:
             pos = self.ends[k].mean(axis=0)
-        s = _arch_parameter(self.case.arch, self.ends[k].mean(axis=0))
+        a = self.case.arch
+        s = arch_parameter(a.kind, a.span, a.rise, self.ends[k].mean(axis=0))
         return JointEvent(order, label, blocks, kind, side, (float(pos[0]), float(pos[1])),
                           float(s), float(load), float(disp))
 
@@ -309,7 +303,9 @@ def assess(
         case = load_case(case)
     folder = Path(out) if out is not None else case.analysis.output
     if write:
-        _check_folder(case, folder, overwrite, comm)
+        error = run_folder_problem(folder, overwrite=overwrite, comm=comm)
+        if error:
+            raise CaseError(error, str(case.source) if case.source else None)
     from masonry_fdem.io import ProgressBar
     from masonry_fdem.solvers import DynamicRelaxation
 
@@ -454,7 +450,7 @@ def assess(
         anchor_length=0.0 if anchors is None else anchors.total_length)
     result.elapsed = time.perf_counter() - t_start
     if write:
-        _write(case, result, folder, overwrite, model, inter, anchors, comm)
+        write_run_folder(case, result, folder, model, inter, anchors, comm)
     return result
 
 
@@ -507,188 +503,3 @@ class _NodeMask:
         d = np.min(np.hypot(X[0][:, None] - self.x[None, :, 0],
                             X[1][:, None] - self.x[None, :, 1]), axis=1)
         return d < 1e-12
-
-
-def _check_folder(case: ArchCase, folder: Path, overwrite: bool, comm) -> None:
-    error = None
-    if comm.rank == 0:
-        if folder.exists() and not folder.is_dir():
-            error = f"output: {folder} exists and is not a folder"
-        elif folder.is_dir() and any(folder.iterdir()) and not overwrite:
-            error = (f"output: the folder {folder} exists and is not empty; choose another "
-                     "output or overwrite it")
-    error = comm.bcast(error, root=0)
-    if error:
-        raise CaseError(error, str(case.source) if case.source else None)
-
-
-# ---------------------------------------------------------------------------- outputs
-def _write(case, res: Assessment, folder: Path, overwrite, model, inter, anchors, comm):
-    from masonry_fdem.io import plot_blocks
-
-    tmp = folder.parent / f".{folder.name}.partial"
-    error = None
-    if comm.rank == 0:
-        shutil.rmtree(tmp, ignore_errors=True)
-        try:
-            tmp.mkdir(parents=True)
-        except OSError as exc:
-            error = f"cannot create {tmp}: {exc.strerror or exc}"
-    error = comm.bcast(error, root=0)
-    if error:
-        raise RuntimeError(error)
-    try:
-        span = case.arch.span
-        u = model.gather_nodal(model.u.x.array)
-        umax = float(np.abs(u).max()) if u is not None and u.size else 0.0
-        umax = comm.bcast(umax, root=0)
-        mag = 0.05 * span / umax if umax > 0 else 1.0
-        plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
-                    title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
-                    joints=inter[1], anchors=anchors)
-        error = None
-        if comm.rank == 0:  # the other ranks must not wait for a rank that failed
-            try:
-                _write_rank0(case, res, tmp, mag)
-                move_into(tmp, folder)
-            except Exception as exc:
-                error = f"writing the run folder {folder}: {exc!r}"
-        error = comm.bcast(error, root=0)
-        if error:
-            raise RuntimeError(error)
-    except BaseException:
-        if comm.rank == 0:
-            shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    res.folder = folder
-    res.report = folder / "report.md"
-    comm.barrier()
-
-
-def move_into(tmp: Path, folder: Path) -> None:
-    """Move every entry of the finished folder ``tmp`` into ``folder`` (created if need
-    be; an entry of the same name is replaced) and remove ``tmp``."""
-    folder.mkdir(parents=True, exist_ok=True)
-    for f in sorted(tmp.iterdir()):
-        dest = folder / f.name
-        if dest.is_dir() and not dest.is_symlink():
-            shutil.rmtree(dest)
-        f.replace(dest)
-    tmp.rmdir()
-
-
-def _write_rank0(case, res: Assessment, tmp: Path, mag: float) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    with open(tmp / "curve.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["load_N", "displacement_m", "iterations"])
-        for row in zip(res.loads, res.displacements, res.iterations, strict=True):
-            w.writerow([f"{row[0]:.6g}", f"{row[1]:.6e}", row[2]])
-    with open(tmp / "hinges.csv", "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["order", "joint", "kind", "side", "x_m", "y_m", "s", "load_N",
-                    "displacement_m"])
-        for e in res.events:
-            w.writerow([e.order, e.joint, e.kind, e.side, f"{e.position[0]:.4f}",
-                        f"{e.position[1]:.4f}", f"{e.s:.4f}", f"{e.load:.6g}",
-                        f"{e.displacement:.6e}"])
-    summary = {k: v for k, v in asdict(res).items()
-               if k not in ("loads", "displacements", "iterations", "folder", "report")}
-    summary["ratio_to_limit_analysis"] = res.ratio
-    with open(tmp / "summary.json", "w") as fh:
-        json.dump(summary, fh, indent=1, default=str)
-    if case.source is not None and Path(case.source).is_file():
-        shutil.copyfile(case.source, tmp / "case.toml")
-
-    fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(res.displacements * 1e3, res.loads / 1e3, "o-", ms=3, label="FDEM")
-    if res.limit_load:
-        ax.axhline(res.limit_load / 1e3, color="C3", ls="--", label="limit analysis")
-    for e in res.events:
-        ax.annotate(str(e.order), (e.displacement * 1e3, e.load / 1e3), fontsize=7,
-                    color="C2", xytext=(2, -9), textcoords="offset points")
-    ax.set_xlabel("displacement at the load line [mm]")
-    ax.set_ylabel("load [kN]")
-    ax.set_title(f"{case.name}: {res.control} control")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(tmp / "load_displacement.png", dpi=120)
-    plt.close(fig)
-
-    layout = case.layout()
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for poly in layout.polygons:
-        p = np.vstack([poly, poly[:1]])
-        ax.plot(p[:, 0], p[:, 1], color="0.6", lw=0.6)
-    for e in res.hinges_at_collapse:
-        ax.plot(*e.position, "o", ms=9, mfc="none", mec="C3", mew=2)
-    for e in res.events:
-        ax.annotate(str(e.order), e.position, fontsize=8, color="C3",
-                    xytext=(4, 4), textcoords="offset points")
-    for _, pos in res.limit_hinges:
-        ax.plot(*pos, "x", ms=8, color="C0", mew=2)
-    for x, y in case.load_points():
-        ax.annotate("", (x, y), xytext=(x, y + 0.12 * case.arch.span),
-                    arrowprops=dict(arrowstyle="->", color="k"))
-    ax.set_aspect("equal")
-    ax.set_title("hinges: FDEM at collapse (red circles; numbers: order of opening), "
-                 "limit analysis (blue ×)", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(tmp / "hinges.png", dpi=120)
-    plt.close(fig)
-    (tmp / "report.md").write_text(_report(case, res, mag))
-
-
-def _report(case, res: Assessment, mag: float) -> str:
-    a, ld = case.arch, case.loading
-    kn = res.collapse_load / 1e3
-    lines = [f"# Assessment of `{case.name}`", ""]
-    lines += [
-        f"- Arch: {a.kind.value}, span {a.span:g} m, {a.rings} ring(s) of {a.ring_thickness:g} m, "
-        f"voussoirs {list(a.voussoirs)}, barrel width {a.width:g} m; {res.cells} triangles.",
-        f"- Load: {ld.control.value} control at {ld.position:g} of the span through a "
-        f"{ld.spreader_width:g} m spreader; self-weight {'on' if ld.self_weight else 'off'}.",
-        f"- Ring interfaces: {case.ring_joint_type}"
-        f"{'' if a.rings > 1 else ' (one ring)'}; radial joints: "
-        f"{'bonded mortar' if case.mortar.bonded else 'dry'}, tan φ {case.mortar.tan_phi:g}.",
-        f"- Damage: {', '.join(d.kind.value for d in case.damage) or 'none'}; "
-        f"anchors: {len(case.anchor_specs)}.",
-        "",
-        "| quantity | value |",
-        "|---|---|",
-        f"| FDEM collapse load | **{kn:.2f} kN** ({kn / 9.80665:.2f} t) |",
-        f"| resolution | {res.resolution / 1e3:.2f} kN |",
-        f"| collapse reached | {'yes' if res.collapsed else 'no (limit of the run)'} |",
-    ]
-    if res.limit_load is not None:
-        lines.append(f"| limit analysis (rigid blocks, LP) | {res.limit_load / 1e3:.2f} kN |")
-        lines.append(f"| FDEM / limit analysis | {res.ratio:.3f} |")
-    elif res.limit_status == "infeasible":
-        lines.append(f"| limit analysis | infeasible: the rigid blocks, with friction "
-                     f"{case.analysis.friction:g} and no bond, find no equilibrium even "
-                     "without the live load (the FDEM model has the mortar's bond) |")
-    elif res.limit_status:
-        lines.append(f"| limit analysis | {res.limit_status} |")
-    lines.append(f"| wall time | {res.elapsed:.0f} s |")
-    lines += ["", "## Load–displacement at the load line", "",
-              "![load-displacement](load_displacement.png)", "",
-              "## Hinge sequence", ""]
-    if res.events:
-        lines += ["| # | joint | kind | opens at | s | hinge x, y [m] | load [kN] |",
-                  "|---|---|---|---|---|---|---|"]
-        for e in res.events:
-            lines.append(f"| {e.order} | {e.joint} | {e.kind} | {e.side} | {e.s:.3f} | "
-                         f"{e.position[0]:.3f}, {e.position[1]:.3f} | {e.load / 1e3:.2f} |")
-    else:
-        lines.append("No joint opened beyond the threshold.")
-    lines += ["", f"Open at collapse: {len(res.hinges_at_collapse)} joint(s). "
-              f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
-              "![hinges](hinges.png)", "",
-              f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
-              "", "Files: `curve.csv`, `hinges.csv`, `summary.json`.", ""]
-    return "\n".join(lines)

@@ -19,7 +19,15 @@ Typical use::
 Lengths are in metres, areas in square metres.
 """
 
-from masonry_fdem.geometry.arches import ArchKind, arch_circle, arch_curve, arch_layout, build_arch
+from masonry_fdem.geometry.arches import (
+    ArchKind,
+    arch_circle,
+    arch_curve,
+    arch_layout,
+    arch_parameter,
+    build_arch,
+    ring_pieces,
+)
 from masonry_fdem.geometry.blockmesh import BlockMesh, unit_name
 from masonry_fdem.geometry.grids import crossed_grid, graded
 from masonry_fdem.geometry.layout import (
@@ -41,7 +49,10 @@ __all__ = [
     "ArchKind",
     "BlockLayout",
     "BlockMesh",
+    "arch_circle",
     "arch_curve",
+    "arch_parameter",
+    "ring_pieces",
     "arch_layout",
     "as_polygon",
     "block_on_base_layout",

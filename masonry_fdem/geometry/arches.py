@@ -46,7 +46,8 @@ import numpy as np
 from masonry_fdem.geometry.blockmesh import BlockMesh
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["ArchKind", "arch_circle", "arch_layout", "arch_curve", "build_arch", "ring_pieces"]
+__all__ = ["ArchKind", "arch_circle", "arch_layout", "arch_curve", "arch_parameter", "build_arch",
+           "ring_pieces"]
 
 # parameters closer than this are the same vertex
 _S_TOL = 1e-10
@@ -147,6 +148,26 @@ def arch_curve(
         return np.column_stack([np.where(left, px, -px), py])
 
     return pointed
+
+
+def arch_parameter(kind: ArchKind | str, span: float, rise: float | None,
+                   p: np.ndarray) -> float:
+    """Position s in [0, 1] along the arch of point ``p`` [m] (the inverse of
+    :func:`arch_curve` at any offset from the intrados; origin at mid-span)."""
+    kind = ArchKind(kind)
+    x, y = float(p[0]), float(p[1])
+    if kind is ArchKind.POINTED:
+        half = 0.5 * span
+        c = (rise**2 - half * half) / span
+        xl = -abs(x)
+        r = math.hypot(xl - c, y)
+        theta = math.atan2(y, xl - c)
+        crown = math.atan2(math.sqrt(max(r * r - c * c, 0.0)), -c)
+        u = (math.pi - theta) / (2.0 * (math.pi - crown))
+        return u if x <= 0.0 else 1.0 - u
+    _, yc, alpha = arch_circle(kind, span, rise)
+    theta = math.atan2(y - yc, x)
+    return (0.5 * math.pi + alpha - theta) / (2.0 * alpha)
 
 
 def ring_pieces(n: int, shift: float) -> list[tuple[float, float]]:

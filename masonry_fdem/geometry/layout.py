@@ -81,15 +81,6 @@ class BlockLayout:
         allp = np.vstack(self.polygons)
         return np.concatenate([allp.min(axis=0), allp.max(axis=0)])
 
-    def translated(self, dx: float, dy: float) -> BlockLayout:
-        """A copy moved by ``(dx, dy)`` [m]."""
-        shift = np.array([dx, dy], dtype=np.float64)
-        return BlockLayout(tuple(p + shift for p in self.polygons), self.materials, self.names)
-
-    def renamed(self, prefix: str) -> BlockLayout:
-        """A copy with every block name prefixed (to combine two copies of a structure)."""
-        return BlockLayout(self.polygons, self.materials, tuple(prefix + n for n in self.names))
-
     def mesh(self, mesh_size: float | None = None, comm: Any | None = None) -> BlockMesh:
         """Mesh the layout with :func:`mesh_blocks` (see there for ``mesh_size``, ``comm``)."""
         return mesh_blocks(

@@ -1,7 +1,7 @@
 """Repairs: grouted steel anchors embedded in the masonry, with bond–slip and prestress."""
 
-from masonry_fdem.interactions.anchors.anchors import Anchor, Anchors, BondLaw, DowelLaw
-from masonry_fdem.interactions.anchors.anchors import SteelLaw, straight_anchor, wall_ties
+from masonry_fdem.interactions.anchors.anchors import Anchors, straight_anchor, wall_ties
+from masonry_fdem.interactions.anchors.laws import Anchor, BondLaw, DowelLaw, SteelLaw
 
 __all__ = ["Anchor", "Anchors", "BondLaw", "DowelLaw", "SteelLaw", "straight_anchor",
            "wall_ties"]

@@ -20,7 +20,6 @@ import math
 from mpi4py import MPI
 
 import numpy as np
-from numba import njit
 
 from masonry_fdem.interactions.disks import _facet_kernels as DF
 from masonry_fdem.interactions.disks import _kernels as DK

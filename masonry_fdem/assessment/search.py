@@ -1,0 +1,543 @@
+"""The anchor layout search of ``masonry-fdem repair``.
+
+:func:`search` looks for a near-optimal anchor layout over the candidate space of the
+case's ``[search]`` table (:class:`~masonry_fdem.assessment.case.SearchSpec`): straight anchors
+drilled from the intrados (:func:`~masonry_fdem.assessment.layouts.inclined_anchors`) at
+``count`` of the ``positions``, each ``inclination``, ``length`` and ``prestress``.
+
+* **Checks first.** A layout whose anchor leaves the structure (through the extrados,
+  into the air past a springing, through a missing voussoir) or whose anchors overlap
+  (closer than ``min_spacing``) is rejected with the reason and never run; the search
+  goes on with the others.
+* **Objectives.** ``gain_per_metre``: the largest collapse-load gain over the
+  unstrengthened arch per metre of anchor installed (Σ bars × length).
+  ``cheapest``: the shortest total anchor length whose collapse load reaches ``target``.
+* **Coarse to fine.** The coarse level is a shorter run of each layout: under load
+  control without following the peak (``follow_peak = false``: the load where
+  equilibrium is first lost), under displacement control to half of
+  ``max_displacement``; a fast proxy of the collapse load. Layouts whose coarse gain
+  per metre is below ``keep_ratio`` of the best, or that are not among the best
+  ``keep``, are dropped as hopeless; the rest are run at the fine level (the case's own
+  analysis, peak followed).
+  Under ``cheapest`` the coarse level drops layouts whose coarse collapse load is below
+  ``keep_ratio`` × target; the fine runs stop as soon as the target is carried
+  (``max_load = target``), in order of increasing anchor length, and the search stops
+  at the first round in which a layout reaches the target: every layout not yet run is
+  longer.
+* **Parallel.** The ranks are split into groups of ``group_size`` (MPI
+  sub-communicators); each group runs one layout at a time (``assess`` on its
+  sub-communicator); one round runs as many layouts as there are groups.
+* **Resumable.** Every finished evaluation is appended to ``journal.jsonl`` in the search
+  folder (after each round). ``resume=True`` (``--resume``) reads it back and runs only
+  what is missing; the ranking is the same as that of a run straight through.
+
+Units: SI (N, m); angles in degrees.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import os
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem.assessment.assess import assess
+from masonry_fdem.assessment.case import AnchorLayout, ArchCase, CaseError, Objective, SearchSpec
+from masonry_fdem.assessment.repair import BASELINE, as_case, free_folder
+
+__all__ = ["RankedLayout", "SearchInterrupted", "SearchResult", "search"]
+
+
+class SearchInterrupted(RuntimeError):
+    """The search stopped before its end (``stop_after``); resume it with
+    ``resume=True``: the journal keeps every finished evaluation."""
+
+
+@dataclass
+class RankedLayout:
+    """One layout of the final ranking (loads [N], lengths [m]).
+
+    Attributes:
+        rank: 1 for the best.
+        layout: the :class:`~masonry_fdem.assessment.case.AnchorLayout`.
+        collapse_load: its collapse load at the fine level (under ``cheapest``: capped at
+            the target).
+        gain: collapse load − the unstrengthened collapse load.
+        length: Σ bars × length of its anchors (the cost).
+        gain_per_metre: gain / length [N/m].
+        reaches_target: whether it carries the target (None without a target).
+    """
+
+    rank: int
+    layout: AnchorLayout
+    collapse_load: float
+    gain: float
+    length: float
+    gain_per_metre: float
+    reaches_target: bool | None
+    collapsed: bool
+
+    @property
+    def key(self) -> str:
+        return self.layout.key
+
+
+@dataclass
+class SearchResult:
+    """Result of :func:`search`.
+
+    Attributes:
+        objective: "gain_per_metre" or "cheapest".
+        baseline: the unstrengthened collapse load at the fine level [N].
+        ranking: the layouts run at the fine level, best first.
+        best: the best layout (None if no layout was run).
+        cheapest: the shortest layout of the ranking that reaches the target (None
+            without a target or if none does).
+        rejected: ``(key, reason)`` of layouts that were not run: invalid geometry
+            (leaves the structure, overlapping anchors) or a failed run.
+        pruned: ``(key, reason)`` of layouts dropped as hopeless.
+        coarse: ``key -> collapse load`` at the coarse level.
+        evaluations: runs made by this call; ``reused``: taken from the journal.
+        folder, report: the search folder and ``report.md`` (None if not written).
+    """
+
+    case: str
+    objective: str
+    target: float | None
+    baseline: float
+    ranking: list[RankedLayout]
+    rejected: list[tuple[str, str]]
+    pruned: list[tuple[str, str]]
+    coarse: dict[str, float] = field(default_factory=dict)
+    evaluations: int = 0
+    reused: int = 0
+    elapsed: float = 0.0
+    folder: Path | None = None
+    report: Path | None = None
+
+    @property
+    def best(self) -> RankedLayout | None:
+        return self.ranking[0] if self.ranking else None
+
+    @property
+    def cheapest(self) -> RankedLayout | None:
+        ok = [r for r in self.ranking if r.reaches_target]
+        return min(ok, key=lambda r: (r.length, r.key)) if ok else None
+
+
+def _fingerprint(case: ArchCase, spec: SearchSpec) -> str:
+    parts = [repr(case.arch), repr(sorted(case.material_table.items())), repr(case.mortar),
+             repr(case.ring_joint), repr(case.loading), repr(case.damage),
+             repr(replace(case.analysis, output=Path("."))), repr(spec)]
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
+
+
+def _level_case(case: ArchCase, level: str, spec: SearchSpec) -> ArchCase:
+    an = replace(case.analysis, limit_analysis=False)
+    ld = case.loading
+    if level == "coarse":
+        an = replace(an, follow_peak=False)
+        if ld.max_displacement is not None:
+            ld = replace(ld, max_displacement=0.5 * ld.max_displacement)
+    if spec.objective is Objective.CHEAPEST and spec.target is not None:
+        ld = replace(ld, max_load=spec.target)
+    return replace(case, analysis=an, loading=ld, anchor_specs=())
+
+
+class _Journal:
+    """The append-only record of finished evaluations (rank 0 writes, all ranks read)."""
+
+    def __init__(self, folder: Path | None, fingerprint: str, comm, resume: bool, source):
+        self.folder, self.comm = folder, comm
+        self.done: dict[tuple[str, str], dict] = {}
+        if folder is None:
+            return
+        error, lines = None, []
+        if comm.rank == 0:
+            folder.mkdir(parents=True, exist_ok=True)
+            head = folder / "search.json"
+            if head.exists():
+                try:
+                    fp = json.loads(head.read_text()).get("fingerprint")
+                except (OSError, ValueError):
+                    fp = None
+                if fp != fingerprint:
+                    error = (f"output: {folder} holds the journal of a different search "
+                             "(another case or candidate space); choose another output or "
+                             "overwrite it")
+            else:
+                head.write_text(json.dumps({"fingerprint": fingerprint}))
+            jf = folder / "journal.jsonl"
+            if error is None and resume and jf.exists():
+                for line in jf.read_text().splitlines():
+                    try:
+                        lines.append(json.loads(line))
+                    except ValueError:  # a line cut short by the interruption
+                        break
+        error = comm.bcast(error, root=0)
+        if error:
+            raise CaseError(error, str(source) if source else None)
+        for row in comm.bcast(lines, root=0):
+            self.done[(row["level"], row["key"])] = row
+
+    def add(self, rows: list[dict]) -> None:
+        for row in rows:
+            self.done[(row["level"], row["key"])] = row
+        if self.folder is not None and self.comm.rank == 0 and rows:
+            with open(self.folder / "journal.jsonl", "a") as fh:
+                for row in rows:
+                    fh.write(json.dumps(row) + "\n")
+                fh.flush()
+                os.fsync(fh.fileno())
+
+
+def search(
+    case: ArchCase | str | Path | Mapping[str, Any],
+    space: SearchSpec | None = None,
+    *,
+    out: str | Path | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    group_size: int = 1,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    write: bool = True,
+    stop_after: int | None = None,
+    callback: Callable[[dict], None] | None = None,
+) -> SearchResult:
+    """Search the candidate space for a near-optimal anchor layout (collective; see the
+    module doc).
+
+    Args:
+        case: the damaged arch (its own ``[[anchors]]`` are ignored).
+        space: the candidate space (default: the case's ``[search]`` table).
+        out: the search folder (default: ``<analysis.output>/search``): journal, ranking,
+            pictures, report.
+        resume: go on from the journal of an interrupted search in ``out``.
+        overwrite: start afresh in a non-empty ``out``.
+        group_size: ranks per layout run; the ranks form ``comm.size / group_size``
+            groups that run layouts side by side.
+        comm: MPI communicator.
+        write: keep a journal and write the folder (False: compute only).
+        stop_after: stop after this many new runs (raises :class:`SearchInterrupted`
+            once they are in the journal); for time-boxed runs and tests.
+        callback: called on every rank after each round with ``{"level", "done",
+            "total"}``.
+
+    Raises:
+        CaseError: a bad case, no candidate space, a folder that is not free, or a
+            journal of another search.
+    """
+    t0 = time.perf_counter()
+    case = as_case(case)
+    spec = space if space is not None else case.search
+    src = str(case.source) if case.source else None
+    if spec is None:
+        raise CaseError("search: the case has no [search] table (the candidate space)", src)
+    if spec.objective is Objective.CHEAPEST and spec.target is None:
+        raise CaseError("search.target: required by objective = \"cheapest\"", src)
+    if group_size < 1 or comm.size % group_size:
+        raise ValueError(f"group_size {group_size} must divide the {comm.size} ranks")
+    folder = None
+    if write:
+        folder = Path(out) if out is not None else case.analysis.output / "search"
+        free_folder(folder, overwrite, comm, case.source, resume)
+    journal = _Journal(folder, _fingerprint(case, spec), comm, resume, case.source)
+    ngroups = comm.size // group_size
+    sub = comm.Split(comm.rank // group_size, comm.rank)
+    stats = {"new": 0, "reused": 0}
+
+    # ---- checks: build every layout's anchors, reject the bad ones with the reason
+    rejected: list[tuple[str, str]] = []
+    valid: list[tuple[AnchorLayout, float]] = []
+    seen: set[str] = set()
+    for lay in spec.candidates():
+        if lay.key in seen:
+            continue
+        seen.add(lay.key)
+        try:
+            anchors = lay.spec(spec).build(case.arch)
+        except ValueError as exc:
+            rejected.append((lay.key, str(exc)))
+            continue
+        problems = case.anchor_problems(anchors, min_spacing=spec.min_spacing)
+        if problems:
+            rejected.append((lay.key, "; ".join(problems)))
+            continue
+        valid.append((lay, float(sum(a.count * a.length for a in anchors))))
+
+    def run(level: str, todo: list[tuple[AnchorLayout | None, float]],
+            stop: Callable[[list[dict]], bool] | None = None) -> None:
+        """Evaluate ``todo`` (None: the unstrengthened arch) at ``level``, in rounds."""
+        base = _level_case(case, level, spec)
+        pending = [(lay, ell) for lay, ell in todo
+                   if (level, lay.key if lay else BASELINE) not in journal.done]
+        stats["reused"] += len(todo) - len(pending)
+        if stop is not None and stop([journal.done[(level, lay.key if lay else BASELINE)]
+                                      for lay, _ in todo
+                                      if (level, lay.key if lay else BASELINE)
+                                      in journal.done]):
+            return
+        for r0 in range(0, len(pending), ngroups):
+            if stop_after is not None and stats["new"] >= stop_after:
+                raise SearchInterrupted(
+                    f"search stopped after {stats['new']} runs; {len(pending) - r0} left at "
+                    f"the {level} level; resume it to go on")
+            batch = pending[r0:r0 + ngroups]
+            mine = comm.rank // group_size
+            row = None
+            if mine < len(batch):
+                lay, ell = batch[mine]
+                row = _evaluate(base, lay, ell, spec, level, sub)
+            # in rank order, that is in the order of the batch
+            rows = [r for r in comm.allgather(row if sub.rank == 0 else None) if r is not None]
+            journal.add(rows)
+            stats["new"] += len(rows)
+            if callback is not None:
+                callback({"level": level, "done": r0 + len(batch), "total": len(pending)})
+            if stop is not None and stop(rows):
+                return
+
+    def load(level, lay):
+        return journal.done[(level, lay.key if lay else BASELINE)]
+
+    pruned: list[tuple[str, str]] = []
+    alive = list(valid)
+    levels = ["coarse", "fine"] if spec.coarse and len(valid) > 1 else ["fine"]
+    coarse: dict[str, float] = {}
+    target = spec.target
+    for level in levels:
+        last = level == levels[-1]
+        if spec.objective is Objective.CHEAPEST:
+            alive.sort(key=lambda c: (c[1], c[0].key))
+            run(level, [(None, 0.0)])
+            if not last:
+                run(level, alive)
+                keep = []
+                for lay, ell in alive:
+                    row = load(level, lay)
+                    coarse[lay.key] = row["collapse_load"]
+                    if "error" in row:
+                        continue
+                    if row["collapse_load"] >= spec.keep_ratio * target:
+                        keep.append((lay, ell))
+                    else:
+                        pruned.append((lay.key, f"hopeless: coarse collapse load "
+                                       f"{row['collapse_load'] / 1e3:.2f} kN < "
+                                       f"{spec.keep_ratio:g} x target"))
+                alive = keep
+            else:
+                def reached(rows):
+                    return any(_reaches(r, target) for r in rows if r["key"] != BASELINE)
+
+                run(level, alive, stop=reached)
+                done = [c for c in alive if (level, c[0].key) in journal.done]
+                if any(_reaches(load(level, c[0]), target) for c in done):
+                    best = min((c for c in done if _reaches(load(level, c[0]), target)),
+                               key=lambda c: (c[1], c[0].key))
+                    for lay, ell in alive:
+                        if (level, lay.key) not in journal.done:
+                            pruned.append((lay.key, f"not run: {ell:.2f} m of anchor, no "
+                                           f"shorter than {best[0].key} ({best[1]:.2f} m), "
+                                           "which reaches the target"))
+                alive = done
+        else:
+            run(level, [(None, 0.0)] + alive)
+            b = load(level, None)["collapse_load"]
+            scores = []
+            for lay, ell in alive:
+                row = load(level, lay)
+                if level == "coarse":
+                    coarse[lay.key] = row["collapse_load"]
+                if "error" not in row:
+                    scores.append(((row["collapse_load"] - b) / ell, lay, ell))
+            scores.sort(key=lambda t: (-t[0], t[2], t[1].key))
+            if not last and scores:
+                top = scores[0][0]
+                keep = []
+                for i, (sc, lay, ell) in enumerate(scores):
+                    if i < spec.keep and (sc >= spec.keep_ratio * top or top <= 0):
+                        keep.append((lay, ell))
+                    else:
+                        why = (f"not among the best {spec.keep}" if i >= spec.keep else
+                               f"below {spec.keep_ratio:g} x the best")
+                        pruned.append((lay.key, f"hopeless: coarse gain "
+                                       f"{sc / 1e3:.2f} kN/m, {why} ({top / 1e3:.2f} kN/m)"))
+                alive = keep
+    # failed runs are reported with the rejected ones
+    for lay, _ in valid:
+        for level in levels:
+            row = journal.done.get((level, lay.key))
+            if row is not None and "error" in row:
+                rejected.append((lay.key, f"{level} run failed: {row['error']}"))
+                break
+    baseline = load("fine", None)["collapse_load"]
+    ranking = []
+    for lay, ell in alive:
+        row = load("fine", lay)
+        if "error" in row:
+            continue
+        p = row["collapse_load"]
+        ranking.append(RankedLayout(0, lay, p, p - baseline, ell, (p - baseline) / ell,
+                                    None if target is None else _reaches(row, target),
+                                    bool(row["collapsed"])))
+    if spec.objective is Objective.CHEAPEST:
+        ranking.sort(key=lambda r: (not r.reaches_target, r.length if r.reaches_target
+                                    else -r.collapse_load, r.key))
+    else:
+        ranking.sort(key=lambda r: (-r.gain_per_metre, r.length, r.key))
+    for i, r in enumerate(ranking):
+        r.rank = i + 1
+    result = SearchResult(case.name, spec.objective.value, target, baseline, ranking,
+                          rejected, pruned, coarse, stats["new"], stats["reused"])
+    result.elapsed = time.perf_counter() - t0
+    sub.Free()
+    if write:
+        if comm.rank == 0:
+            _write_search(case, spec, result, folder)
+        result.folder, result.report = folder, folder / "report.md"
+        comm.barrier()
+    return result
+
+
+def _reaches(row: dict, target: float | None) -> bool:
+    return target is not None and "error" not in row and \
+        row["collapse_load"] >= target * (1.0 - 1e-9)
+
+
+def _evaluate(base: ArchCase, lay: AnchorLayout | None, ell: float, spec: SearchSpec,
+              level: str, sub) -> dict:
+    """One run (collective on ``sub``); the journal row."""
+    key = lay.key if lay is not None else BASELINE
+    case = base if lay is None else base.with_anchors((lay.spec(spec),))
+    t = time.perf_counter()
+    try:
+        r = assess(case, comm=sub, write=False, progress=False)
+    except (RuntimeError, ValueError) as exc:
+        return {"level": level, "key": key, "error": str(exc), "length": ell}
+    row = {"level": level, "key": key, "collapse_load": float(r.collapse_load),
+           "resolution": float(r.resolution), "collapsed": bool(r.collapsed),
+           "length": ell, "steps": len(r.loads), "elapsed": time.perf_counter() - t}
+    if r.anchors:
+        row["force_max"] = max(a["force_max"] for a in r.anchors)
+        row["slip_max"] = max(a["slip_max"] for a in r.anchors)
+    return row
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+
+
+def _write_search(case: ArchCase, spec: SearchSpec, res: SearchResult, folder: Path) -> None:
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(["rank", "layout", "anchors", "positions", "inclination_deg", "length_m",
+                "prestress_N", "anchor_metres", "collapse_load_N", "gain_N",
+                "gain_per_metre_N_per_m", "reaches_target", "coarse_collapse_load_N"])
+    for r in res.ranking:
+        lay = r.layout
+        w.writerow([r.rank, r.key, len(lay.positions), " ".join(f"{p:g}" for p in lay.positions),
+                    f"{lay.inclination:g}", "through" if lay.length is None else f"{lay.length:g}",
+                    f"{lay.prestress:g}", f"{r.length:.4f}", f"{r.collapse_load:.6g}",
+                    f"{r.gain:.6g}", f"{r.gain_per_metre:.6g}",
+                    "" if r.reaches_target is None else r.reaches_target,
+                    f"{res.coarse[r.key]:.6g}" if r.key in res.coarse else ""])
+    _atomic_write(folder / "ranking.csv", buf.getvalue())
+    summary = {k: v for k, v in asdict(res).items()
+               if k not in ("ranking", "folder", "report")}
+    summary["ranking"] = [{"rank": r.rank, "key": r.key, "collapse_load": r.collapse_load,
+                           "gain": r.gain, "length": r.length,
+                           "gain_per_metre": r.gain_per_metre,
+                           "reaches_target": r.reaches_target} for r in res.ranking]
+    summary["best"] = res.best.key if res.best else None
+    summary["cheapest"] = res.cheapest.key if res.cheapest else None
+    _atomic_write(folder / "summary.json", json.dumps(summary, indent=1, default=str))
+
+    # the best layouts on the arch
+    show = res.ranking[:4]
+    layout = case.layout()
+    n = max(1, len(show))
+    fig, axes = plt.subplots(1, n, figsize=(3.6 * n, 2.9), squeeze=False)
+    for ax, r in zip(axes[0], show or [None], strict=False):
+        for poly in layout.polygons:
+            p = np.vstack([poly, poly[:1]])
+            ax.plot(p[:, 0], p[:, 1], color="0.65", lw=0.5)
+        if r is not None:
+            for a in r.layout.spec(spec).build(case.arch):
+                ax.plot(a.points[:, 0], a.points[:, 1], "-", color="C3", lw=2.2)
+            ax.set_title(f"#{r.rank}: {r.collapse_load / 1e3:.1f} kN, {r.length:.2f} m,\n"
+                         f"{r.gain_per_metre / 1e3:.1f} kN/m", fontsize=8)
+        for x, y in case.load_points():
+            ax.annotate("", (x, y), xytext=(x, y + 0.15 * case.arch.span),
+                        arrowprops=dict(arrowstyle="->", color="k"))
+        ax.set_aspect("equal")
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(folder / "best_layouts.png", dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    if res.ranking:
+        ax.plot([r.length for r in res.ranking], [r.collapse_load / 1e3 for r in res.ranking],
+                "o", color="C3", label="fine level")
+        for r in res.ranking[:4]:
+            ax.annotate(f"#{r.rank}", (r.length, r.collapse_load / 1e3), fontsize=8,
+                        xytext=(3, 3), textcoords="offset points")
+    ax.axhline(res.baseline / 1e3, color="C0", ls="--", label="unstrengthened")
+    if res.target:
+        ax.axhline(res.target / 1e3, color="k", ls=":", label="target")
+    ax.set_xlabel("anchor installed [m]")
+    ax.set_ylabel("collapse load [kN]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(folder / "load_vs_length.png", dpi=120)
+    plt.close(fig)
+
+    goal = ("largest collapse-load gain per metre of anchor" if res.objective ==
+            "gain_per_metre" else f"cheapest layout carrying {res.target / 1e3:.2f} kN")
+    lines = [f"# Anchor layout search for `{case.name}`", "",
+             f"Objective: {goal}. Unstrengthened collapse load: "
+             f"**{res.baseline / 1e3:.2f} kN**. Candidates: {len(spec.candidates())}; "
+             f"rejected {len(res.rejected)}; dropped as hopeless {len(res.pruned)}; "
+             f"ranked {len(res.ranking)}. Runs: {res.evaluations} in this session, "
+             f"{res.reused} from the journal.", ""]
+    if res.best:
+        lines.append(f"Best: **{res.best.key}**: {res.best.collapse_load / 1e3:.2f} kN, "
+                     f"{res.best.length:.2f} m of anchor.")
+    if res.target:
+        ch = res.cheapest
+        lines.append(f"Cheapest reaching {res.target / 1e3:.2f} kN: " +
+                     (f"**{ch.key}** ({ch.length:.2f} m)." if ch else "none of those run."))
+    lines += ["", "| rank | layout | anchor [m] | collapse load [kN] | gain [kN] | "
+              "gain per metre [kN/m] |", "|---|---|---|---|---|---|"]
+    for r in res.ranking:
+        lines.append(f"| {r.rank} | {r.key} | {r.length:.2f} | {r.collapse_load / 1e3:.2f} | "
+                     f"{r.gain / 1e3:+.2f} | {r.gain_per_metre / 1e3:.2f} |")
+    lines += ["", "![best layouts](best_layouts.png)", "", "![load vs length]"
+              "(load_vs_length.png)", ""]
+    if res.rejected:
+        lines += ["## Rejected", ""] + [f"- `{k}`: {why}" for k, why in res.rejected] + [""]
+    if res.pruned:
+        lines += ["## Dropped as hopeless", ""] + [f"- `{k}`: {why}" for k, why in res.pruned]
+        lines.append("")
+    lines += ["Files: `ranking.csv`, `summary.json`, `journal.jsonl` (every run; "
+              "`masonry-fdem repair --resume` goes on from it).", ""]
+    _atomic_write(folder / "report.md", "\n".join(lines))

@@ -1,0 +1,522 @@
+"""The parts of an arch case (:class:`ArchCase`): arch, loading, damage, analysis,
+anchors and layout search specs, each frozen and checked by :mod:`.parse`. Units SI."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from masonry_fdem.assessment.layouts import inclined_anchors, intrados_stitch, radial_anchors
+from masonry_fdem.constants import G
+from masonry_fdem.geometry.arches import ArchKind, arch_layout, arch_parameter, ring_pieces
+from masonry_fdem.geometry.layout import BlockLayout
+from masonry_fdem.geometry.planar import inside_any, on_segments, polyline_distance
+from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
+from masonry_fdem.interactions.joints import JointMaterial
+from masonry_fdem.materials.elastic import Material
+
+__all__ = ["TONNE_FORCE", "AnalysisSpec", "AnchorLayout", "AnchorSpec", "ArchCase", "ArchSpec",
+           "CaseError", "Damage", "DamageKind", "LoadControl", "LoadingSpec", "Objective",
+           "SearchSpec", "S_TOL", "classify_interface", "top_of"]
+
+#: One tonne-force [N].
+TONNE_FORCE = 1000.0 * G
+
+REQUIRED = object()
+S_TOL = 1e-9
+
+
+class CaseError(ValueError):
+    """Problems in a case, all of them (``problems``: one line each)."""
+
+    def __init__(self, problems: str | Sequence[str], source: str | None = None):
+        self.problems = [problems] if isinstance(problems, str) else list(problems)
+        self.source = source
+        head = f"{source}: " if source else ""
+        if len(self.problems) == 1:
+            msg = head + self.problems[0]
+        else:
+            msg = f"{head}{len(self.problems)} problems:\n" + "\n".join(
+                "  " + p for p in self.problems)
+        super().__init__(msg)
+
+
+class LoadControl(StrEnum):
+    """How the load is raised."""
+
+    LOAD = "load"
+    DISPLACEMENT = "displacement"
+
+
+class DamageKind(StrEnum):
+    """Kinds of ``[[damage]]`` entries."""
+
+    RING_SEPARATION = "ring_separation"
+    DECAYED_MORTAR = "decayed_mortar"
+    OPEN_JOINT = "open_joint"
+    MISSING_BRICK = "missing_brick"
+
+
+@dataclass(frozen=True)
+class ArchSpec:
+    """The ``[arch]`` table (lengths in m); ``voussoirs`` has one count per ring."""
+
+    kind: ArchKind
+    span: float
+    rise: float | None
+    rings: int
+    ring_thickness: float
+    voussoirs: tuple[int, ...]
+    stagger: float
+    segments: int
+    abutment_height: float
+    abutment_width: float | None
+    width: float
+    mesh_size: float
+    voussoir_material: str
+    abutment_material: str
+
+    def layout_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`~masonry_fdem.geometry.arch_layout`."""
+        return dict(kind=self.kind, span=self.span, rise=self.rise, rings=self.rings,
+                    ring_thickness=self.ring_thickness, voussoirs=list(self.voussoirs),
+                    stagger=self.stagger, segments=self.segments,
+                    abutment_height=self.abutment_height, abutment_width=self.abutment_width,
+                    material=self.voussoir_material,
+                    abutment_material=self.abutment_material)
+
+    def joint_positions(self, ring: int) -> np.ndarray:
+        """Positions s of the joints of ``ring``, springings included (n_blocks + 1)."""
+        pieces = ring_pieces(self.voussoirs[ring], self.stagger * ring)
+        return np.array([pieces[0][0], *(b for _, b in pieces)])
+
+    def blocks_in_ring(self, ring: int) -> int:
+        """Number of voussoirs of ``ring`` (one more than ``voussoirs`` if staggered)."""
+        return len(self.joint_positions(ring)) - 1
+
+
+@dataclass(frozen=True)
+class LoadingSpec:
+    """The ``[loading]`` table; ``position`` is always the fraction of the span."""
+
+    position: float
+    spreader_width: float
+    increment: float
+    max_load: float | None
+    self_weight: bool
+    control: LoadControl
+    displacement_increment: float | None
+    max_displacement: float | None
+
+
+@dataclass(frozen=True)
+class Damage:
+    """One ``[[damage]]`` entry; ``start``/``end`` are its ``from``/``to``."""
+
+    kind: DamageKind
+    rings: tuple[int, ...] = ()
+    start: float = 0.0
+    end: float = 1.0
+    factor: float = 1.0
+    ring: int | None = None
+    index: int | None = None
+
+
+@dataclass(frozen=True)
+class AnalysisSpec:
+    """The ``[analysis]`` table."""
+
+    limit_analysis: bool
+    friction: float
+    dr_rtol: float
+    max_iterations: int
+    output: Path
+    refinements: int = 4
+    hinge_opening: float = 1e-5
+    penalty_factor: float = 20.0
+    post_peak_steps: int = 3
+    post_peak_drop: float = 0.2
+    follow_peak: bool = True
+
+
+@dataclass(frozen=True)
+class AnchorSpec:
+    """One ``[[anchors]]`` entry (angles in degrees, lengths in m, forces in N)."""
+
+    layout: str
+    diameter: float
+    steel: SteelLaw
+    bond: BondLaw
+    angles: tuple[float, ...] = ()
+    cover: float = 0.02
+    start_angle: float | None = None
+    end_angle: float | None = None
+    depth: float | None = None
+    pieces: int | None = None
+    positions: tuple[float, ...] = ()
+    inclination: float = 90.0
+    length: float | None = None
+    count: float = 1.0
+    prestress: float = 0.0
+    plates: str = "none"
+    bond_diameter: float | None = None
+    segment: float | None = None
+    name: str = "anchor"
+
+    def build(self, arch: ArchSpec) -> list[Anchor]:
+        """The anchors in ``arch``.
+
+        Raises:
+            ValueError: an angle outside the arch, a non-circular arch, bad anchor data.
+        """
+        kw = dict(diameter=self.diameter, steel=self.steel, bond=self.bond, count=self.count,
+                  prestress=self.prestress, plates=self.plates,
+                  bond_diameter=self.bond_diameter, segment=self.segment, name=self.name)
+        geo = dict(span=arch.span, kind=arch.kind.value, rise=arch.rise)
+        if self.layout == "radial":
+            return radial_anchors(self.angles, ring_thickness=arch.ring_thickness,
+                                  rings=arch.rings, cover=self.cover, **geo, **kw)
+        if self.layout == "inclined":
+            return inclined_anchors(self.positions, inclination=self.inclination,
+                                    length=self.length, ring_thickness=arch.ring_thickness,
+                                    rings=arch.rings, cover=self.cover, **geo, **kw)
+        depth = arch.rings * arch.ring_thickness
+        if not 0.0 < self.depth < depth:
+            raise ValueError(f"depth {self.depth} m is outside the arch (0..{depth:g} m)")
+        return [intrados_stitch(self.start_angle, self.end_angle, depth=self.depth,
+                                pieces=self.pieces, **geo, **kw)]
+
+
+@dataclass(frozen=True)
+class AnchorLayout:
+    """One candidate of a layout search: straight anchors drilled from the intrados
+    (see :func:`~masonry_fdem.assessment.layouts.inclined_anchors`), all alike.
+
+    Attributes:
+        positions: s of the entry points (0: left springing, 1: right springing).
+        inclination: angle to the intrados tangent [deg] (90: radial).
+        length: anchor length [m] (None: through to the extrados cover).
+        prestress: lock-off force [N] per bar (0: passive anchors).
+    """
+
+    positions: tuple[float, ...]
+    inclination: float = 90.0
+    length: float | None = None
+    prestress: float = 0.0
+
+    @property
+    def key(self) -> str:
+        """A stable, readable identifier (the search journal's key)."""
+        pos = ",".join(f"{p:.4g}" for p in self.positions)
+        ell = "through" if self.length is None else f"{self.length:.4g}m"
+        return f"s=[{pos}] {self.inclination:.4g}deg {ell} P={self.prestress:.4g}N"
+
+    def spec(self, search: SearchSpec) -> AnchorSpec:
+        """The ``[[anchors]]`` entry of this layout with the search's bar and bond."""
+        return AnchorSpec("inclined", search.diameter, search.steel, search.bond,
+                          positions=self.positions, inclination=self.inclination,
+                          length=self.length, cover=search.cover, count=search.bars,
+                          prestress=self.prestress,
+                          plates="both" if self.prestress > 0 else "none", name="anchor")
+
+
+class Objective(StrEnum):
+    """What the layout search looks for."""
+
+    GAIN_PER_METRE = "gain_per_metre"
+    CHEAPEST = "cheapest"
+
+
+@dataclass(frozen=True)
+class SearchSpec:
+    """The ``[search]`` table: the candidate space of a layout search (see
+    :func:`masonry_fdem.assessment.search.search`). Lengths [m], angles [deg], forces [N].
+
+    The candidates are every combination of ``count`` positions out of ``positions``
+    (for each of ``counts``), with each of ``inclinations``, ``lengths`` and
+    ``prestress``, plus the explicit ``layouts``.
+    """
+
+    positions: tuple[float, ...] = ()
+    counts: tuple[int, ...] = (1,)
+    inclinations: tuple[float, ...] = (90.0,)
+    lengths: tuple[float | None, ...] = (None,)
+    prestress: tuple[float, ...] = (0.0,)
+    layouts: tuple[AnchorLayout, ...] = ()
+    diameter: float = 0.016
+    bars: float = 1.0
+    cover: float = 0.02
+    min_spacing: float = 0.05
+    steel: SteelLaw = SteelLaw()
+    bond: BondLaw = BondLaw.uniform(2e6, 2e-4)
+    objective: Objective = Objective.GAIN_PER_METRE
+    target: float | None = None
+    keep: int = 4
+    keep_ratio: float = 0.5
+    coarse: bool = True
+    max_candidates: int = 500
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "objective", Objective(self.objective))
+        if self.objective is Objective.CHEAPEST and self.target is None:
+            raise ValueError('objective "cheapest" needs a target load [N]')
+        if self.keep < 1 or not 0.0 <= self.keep_ratio <= 1.0:
+            raise ValueError(f"keep must be >= 1 and keep_ratio in [0, 1], got "
+                             f"{self.keep}, {self.keep_ratio}")
+
+    def candidates(self) -> list[AnchorLayout]:
+        """The candidate layouts, in a fixed order (explicit ``layouts`` last)."""
+        import itertools
+
+        out = []
+        for n in self.counts:
+            for pos in itertools.combinations(self.positions, n):
+                for inc in self.inclinations:
+                    for ell in self.lengths:
+                        for p in self.prestress:
+                            out.append(AnchorLayout(tuple(pos), inc, ell, p))
+        return out + list(self.layouts)
+
+
+
+@dataclass(frozen=True, eq=False)
+class ArchCase:
+    """A validated case (see the module doc); build it with :func:`load_case`."""
+
+    name: str
+    arch: ArchSpec
+    material_table: Mapping[str, Material]
+    mortar: JointMaterial
+    ring_joint: JointMaterial
+    ring_joint_type: str
+    loading: LoadingSpec
+    damage: tuple[Damage, ...]
+    analysis: AnalysisSpec
+    anchor_specs: tuple[AnchorSpec, ...]
+    source: Path | None = None
+    search: SearchSpec | None = None
+
+    def layout(self) -> BlockLayout:
+        """The arch and its abutments, without the voussoirs of "missing_brick" damage."""
+        full = arch_layout(**self.arch.layout_kwargs())
+        gone = {f"voussoir:{d.ring}:{d.index}" for d in self.damage
+                if d.kind is DamageKind.MISSING_BRICK}
+        keep = [i for i, n in enumerate(full.names) if n not in gone]
+        return BlockLayout(tuple(full.polygons[i] for i in keep),
+                           tuple(full.materials[i] for i in keep),
+                           tuple(full.names[i] for i in keep))
+
+    def mesh_layout(self) -> BlockLayout:
+        """:meth:`layout` with the :meth:`load_points` added as vertices of the
+        voussoirs they bear on, so the mesh has a node exactly there (the outlines are
+        unchanged: the new vertices lie on straight edges)."""
+        layout = self.layout()
+        polys = list(layout.polygons)
+        tol = 1e-9 * self.arch.span
+        for pt in self.load_points():
+            for i, (poly, name) in enumerate(zip(polys, layout.names, strict=True)):
+                if not name.startswith("voussoir:"):
+                    continue
+                a, b = poly, np.roll(poly, -1, axis=0)
+                d = b - a
+                t = np.einsum("ij,ij->i", pt - a, d) / np.einsum("ij,ij->i", d, d)
+                near = np.linalg.norm(a + np.clip(t, 0, 1)[:, None] * d - pt, axis=1)
+                k = int(np.argmin(near))
+                if near[k] > tol:
+                    continue
+                if np.min(np.linalg.norm(poly - pt, axis=1)) > tol:
+                    polys[i] = np.insert(poly, k + 1, pt, axis=0)
+                break
+        return BlockLayout(tuple(polys), layout.materials, layout.names)
+
+    def materials(self) -> dict[str, Material]:
+        """Block material name -> :class:`~masonry_fdem.materials.Material`."""
+        return dict(self.material_table)
+
+    def anchors(self) -> list[Anchor]:
+        """The ``[[anchors]]`` as :class:`~masonry_fdem.interactions.anchors.Anchor` objects."""
+        return [a for spec in self.anchor_specs for a in spec.build(self.arch)]
+
+    def anchor_problems(self, anchors: Sequence[Anchor] | None = None,
+                        min_spacing: float | None = None) -> list[str]:
+        """What is wrong with an anchor layout in this arch (empty if nothing).
+
+        Args:
+            anchors: the anchors (default: the case's own :meth:`anchors`).
+            min_spacing: if given, two anchors closer than this [m] (crossing, touching
+                or running side by side) are a problem too.
+
+        An anchor leaves the structure when a point of it lies outside every block of
+        :meth:`layout` (through the extrados, past a springing into the air, through
+        a missing voussoir); it is tested every 1/20 of a ring thickness along the bar.
+        """
+        anchors = self.anchors() if anchors is None else list(anchors)
+        polys = list(self.layout().polygons)
+        tol = 1e-9 * self.arch.span
+        step = self.arch.ring_thickness / 20.0
+        out = []
+        for k, a in enumerate(anchors):
+            label = a.name or f"anchor {k}"
+            pts = []
+            for p, q in zip(a.points[:-1], a.points[1:], strict=True):
+                m = max(1, math.ceil(np.linalg.norm(q - p) / step))
+                pts.append(p + np.linspace(0.0, 1.0, m + 1)[:, None] * (q - p))
+            pts = np.vstack(pts)
+            bad = ~inside_any(polys, pts, tol)
+            if bad.any():
+                x, y = pts[int(np.argmax(bad))]
+                out.append(f"{label} leaves the structure at ({x:.3f}, {y:.3f}) m: "
+                           "that point is in no block of the arch or its abutments")
+        if min_spacing is not None:
+            for i in range(len(anchors)):
+                for j in range(i + 1, len(anchors)):
+                    d = polyline_distance(anchors[i].points, anchors[j].points)
+                    if d < min_spacing:
+                        li = anchors[i].name or f"anchor {i}"
+                        lj = anchors[j].name or f"anchor {j}"
+                        how = "cross" if d <= tol else f"are {d * 1e3:.1f} mm apart"
+                        out.append(f"{li} and {lj} overlap: they {how}, closer than the "
+                                   f"minimum spacing {min_spacing * 1e3:.0f} mm")
+        return out
+
+    def with_anchors(self, specs: Sequence[AnchorSpec]) -> ArchCase:
+        """The same case with these ``[[anchors]]`` instead of its own (none: unstrengthened)."""
+        return replace(self, anchor_specs=tuple(specs))
+
+    def load_x(self) -> float:
+        """Horizontal coordinate [m] of the load (the origin is at mid-span)."""
+        return (self.loading.position - 0.5) * self.arch.span
+
+    def load_point(self) -> tuple[float, float]:
+        """``(x, y)`` [m] of the load on the extrados (on the voussoir outlines)."""
+        x = self.load_x()
+        return x, top_of(self.layout(), x)
+
+    def load_points(self) -> np.ndarray:
+        """``(k, 2)`` points [m] where the spreader bears on the extrados: its two ends
+        (the load point if there is no spreader); each takes an equal share."""
+        half = 0.5 * self.loading.spreader_width
+        if half == 0.0:
+            return np.array([self.load_point()])
+        layout, x = self.layout(), self.load_x()
+        return np.array([[xs, top_of(layout, xs)] for xs in (x - half, x + half)])
+
+    def joint_materials(self) -> dict[tuple[str, str], JointMaterial]:
+        """Joint material per pair of block materials (the mortar) for
+        :class:`~masonry_fdem.interactions.joints.joints.Joints`; see :meth:`joint_rules` for the rest."""
+        v, a = self.arch.voussoir_material, self.arch.abutment_material
+        return {(v, v): self.mortar, (v, a): self.mortar}
+
+    def joint_rules(
+        self, layout: BlockLayout | None = None
+    ) -> list[tuple[Callable[[np.ndarray], bool], JointMaterial | None]]:
+        """``where`` rules of :class:`~masonry_fdem.interactions.joints.joints.Joints`: the ring
+        interfaces and the damaged joints (None: no bond, left to the contact).
+
+        A joint segment matches a rule when its midpoint lies on one of the rule's
+        interfaces of ``layout`` (default :meth:`layout`).
+        """
+        from masonry_fdem.solvers.limit_analysis import find_interfaces
+
+        layout = self.layout() if layout is None else layout
+        itf = find_interfaces(layout)
+        groups: dict[Any, tuple[JointMaterial | None, list[int]]] = {}
+        for i in range(itf.size):
+            where = classify_interface(layout.names[itf.block_a[i]], layout.names[itf.block_b[i]],
+                              self.arch)
+            if where is None:
+                continue
+            mid = 0.5 * (itf.start[i] + itf.end[i])
+            key = self._joint_state(where, mid)
+            if key == ("joint", 1.0):
+                continue  # plain mortar: the materials table
+            if key not in groups:
+                groups[key] = (self._joint_material(*key), [])
+            groups[key][1].append(i)
+        tol = 1e-6 * self.arch.span
+        return [(on_segments(itf.start[idx], itf.end[idx], tol), mat)
+                for mat, idx in groups.values()]
+
+    def _joint_state(self, where: tuple[str, int, int], mid: np.ndarray):
+        kind, k, j = where
+        s = (self.arch.joint_positions(k)[j] if kind == "joint"
+             else arch_parameter(self.arch.kind, self.arch.span, self.arch.rise, mid))
+        factor = 1.0
+        for d in self.damage:
+            inside = d.start - S_TOL <= s <= d.end + S_TOL
+            if d.kind is DamageKind.OPEN_JOINT and kind == "joint" and (k, j) == (d.ring, d.index):
+                return ("dry", 0.0)
+            if d.kind is DamageKind.RING_SEPARATION and kind == "ring" and inside:
+                if min(d.rings) < k <= max(d.rings):
+                    return ("dry", 0.0)
+            if d.kind is DamageKind.DECAYED_MORTAR and inside:
+                if (k in d.rings) and (kind == "joint" or k - 1 in d.rings):
+                    factor = min(factor, d.factor)
+        return (kind, factor)
+
+    def _joint_material(self, kind: str, factor: float) -> JointMaterial | None:
+        if kind == "dry":
+            return None
+        base = self.mortar if kind == "joint" else self.ring_joint
+        if factor == 1.0:
+            return base
+        return replace(base, ft=base.ft * factor, c=base.c * factor,
+                       fc=None if base.fc is None else base.fc * factor)
+
+    def limit_analysis(self, **kw: Any):
+        """Rigid-block collapse load of the case by
+        :func:`~masonry_fdem.solvers.limit_analysis.limit_analysis`: the live load is 1 N shared by
+        :meth:`load_points`, so the load factor is the collapse load [N]. Keywords
+        override the arguments (e.g. ``friction``)."""
+        from masonry_fdem.solvers.limit_analysis import limit_analysis
+
+        pts = self.load_points()
+        args = dict(
+            density={n: m.density for n, m in self.material_table.items()},
+            width=self.arch.width, supports="abutment:*",
+            live_loads=[((p[0], p[1]), (0.0, -1.0 / len(pts))) for p in pts],
+            friction=self.analysis.friction, g=G if self.loading.self_weight else 0.0,
+            max_load_factor=self.loading.max_load or 1e9)
+        args.update(kw)
+        return limit_analysis(self.layout(), **args)
+
+
+# ---------------------------------------------------------------------- geometry helpers
+def top_of(layout: BlockLayout, x: float) -> float:
+    """Highest y [m] of the voussoir outlines on the vertical line through x."""
+    best = -math.inf
+    for poly, name in zip(layout.polygons, layout.names, strict=True):
+        if not name.startswith("voussoir:"):
+            continue
+        a, b = poly, np.roll(poly, -1, axis=0)
+        lo, hi = np.minimum(a[:, 0], b[:, 0]), np.maximum(a[:, 0], b[:, 0])
+        m = (lo <= x) & (x <= hi) & (hi > lo)
+        if m.any():
+            t = (x - a[m, 0]) / (b[m, 0] - a[m, 0])
+            best = max(best, float(np.max(a[m, 1] + t * (b[m, 1] - a[m, 1]))))
+    if not math.isfinite(best):
+        raise CaseError(f"loading: no voussoir under x = {x:g} m")
+    return best
+
+
+def classify_interface(na: str, nb: str, arch: ArchSpec) -> tuple[str, int, int] | None:
+    """("joint", ring, joint index) or ("ring", upper ring, -1) of the interface of two
+    blocks; None between abutments."""
+    pa, pb = na.split(":"), nb.split(":")
+    if pa[0] == "abutment":
+        pa, pb = pb, pa
+    if pa[0] != "voussoir":
+        return None
+    ka, ja = int(pa[1]), int(pa[2])
+    if pb[0] == "abutment":
+        return ("joint", ka, 0 if pb[1] == "left" else arch.blocks_in_ring(ka))
+    kb, jb = int(pb[1]), int(pb[2])
+    if ka == kb:
+        return ("joint", ka, max(ja, jb))
+    return ("ring", max(ka, kb), -1)
