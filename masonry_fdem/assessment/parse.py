@@ -359,7 +359,7 @@ def _parse_steel_bond(t: Table, problems: list[str], path: str):
     return steel, bond
 
 
-def _parse_search(t: Table, problems: list[str], arch: ArchSpec | None) -> SearchSpec | None:
+def _parse_search(t: Table, problems: list[str]) -> SearchSpec | None:
     n0 = len(problems)
 
     def s_list(key):
@@ -499,7 +499,7 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
               for i, d in enumerate(root.tables("damage"))]
     anchors = [_parse_anchor(i, a, problems, arch) for i, a in enumerate(root.tables("anchors"))]
     st = root.table("search", _SEARCH_KEYS)
-    search = _parse_search(st, problems, arch) if st is not None else None
+    search = _parse_search(st, problems) if st is not None else None
     an = root.table("analysis", _ANALYSIS_KEYS) or Table(problems, "analysis", {}, ())
     analysis = AnalysisSpec(
         an.boolean("limit_analysis", True),
