@@ -49,7 +49,7 @@ import numpy as np
 
 from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
 from masonry_fdem.assessment.specs import classify_interface
-from masonry_fdem.geometry.arches import ArchKind, arch_parameter
+from masonry_fdem.geometry.arches import arch_centre, arch_parameter
 from masonry_fdem.assessment.report import write_run_folder
 from masonry_fdem.io.rundir import run_folder_problem
 
@@ -222,15 +222,7 @@ class _JointMonitor:
     def _intrados_end(self, k: int) -> int:
         """0 or 1: the end of joint k nearer the arch's centre of curvature."""
         arch = self.case.arch
-        mid = self.ends[k].mean(axis=0)
-        if arch.kind is ArchKind.SEGMENTAL:
-            half = 0.5 * arch.span
-            c = np.array([0.0, arch.rise - (half * half + arch.rise**2) / (2 * arch.rise)])
-        elif arch.kind is ArchKind.POINTED:
-            cx = (arch.rise**2 - (0.5 * arch.span) ** 2) / arch.span
-            c = np.array([cx if mid[0] < 0 else -cx, 0.0])
-        else:
-            c = np.zeros(2)
+        c = arch_centre(arch.kind, arch.span, arch.rise, self.ends[k].mean(axis=0)[0])
         d = np.linalg.norm(self.ends[k] - c, axis=1)
         return int(np.argmin(d))
 

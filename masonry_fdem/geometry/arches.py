@@ -46,8 +46,8 @@ import numpy as np
 from masonry_fdem.geometry.blockmesh import BlockMesh
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["ArchKind", "arch_circle", "arch_layout", "arch_curve", "arch_parameter", "build_arch",
-           "ring_pieces"]
+__all__ = ["ArchKind", "arch_centre", "arch_circle", "arch_layout", "arch_curve",
+           "arch_parameter", "build_arch", "pointed_offset", "ring_pieces"]
 
 # parameters closer than this are the same vertex
 _S_TOL = 1e-10
@@ -133,7 +133,7 @@ def arch_curve(
 
     if rise <= half:
         raise ValueError(f"a pointed arch needs rise > span/2 = {half}, got {rise}")
-    c = (rise * rise - half * half) / span
+    c = pointed_offset(span, rise)
 
     def pointed(s: np.ndarray, d: float) -> np.ndarray:
         s = np.asarray(s, dtype=np.float64)
@@ -150,6 +150,23 @@ def arch_curve(
     return pointed
 
 
+def pointed_offset(span: float, rise: float) -> float:
+    """Distance [m] of each centre of a pointed arch from the axis, on the springing line
+    (the left half's centre is at +c, the right half's at −c)."""
+    half = 0.5 * span
+    return (rise * rise - half * half) / span
+
+
+def arch_centre(kind: ArchKind | str, span: float, rise: float | None,
+                x: float) -> np.ndarray:
+    """Centre of curvature [m] of the intrados on the side of abscissa ``x`` [m]."""
+    kind = ArchKind(kind)
+    if kind is ArchKind.POINTED:
+        c = pointed_offset(span, rise)
+        return np.array([c if x < 0 else -c, 0.0])
+    return np.array([0.0, arch_circle(kind, span, rise)[1]])
+
+
 def arch_parameter(kind: ArchKind | str, span: float, rise: float | None,
                    p: np.ndarray) -> float:
     """Position s in [0, 1] along the arch of point ``p`` [m] (the inverse of
@@ -157,8 +174,7 @@ def arch_parameter(kind: ArchKind | str, span: float, rise: float | None,
     kind = ArchKind(kind)
     x, y = float(p[0]), float(p[1])
     if kind is ArchKind.POINTED:
-        half = 0.5 * span
-        c = (rise**2 - half * half) / span
+        c = pointed_offset(span, rise)
         xl = -abs(x)
         r = math.hypot(xl - c, y)
         theta = math.atan2(y, xl - c)
