@@ -15,22 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from masonry_fdem.assessment.specs import (
-    S_TOL,
-    TONNE_FORCE,
-    AnalysisSpec,
-    AnchorLayout,
-    AnchorSpec,
-    ArchCase,
-    ArchSpec,
-    CaseError,
-    Damage,
-    DamageKind,
-    LoadControl,
-    LoadingSpec,
-    Objective,
-    SearchSpec,
-)
+from masonry_fdem.assessment.specs import S_TOL, TONNE_FORCE, AnalysisSpec, AnchorLayout, AnchorSpec
+from masonry_fdem.assessment.specs import ArchCase, ArchSpec, CaseError, Damage, DamageKind
+from masonry_fdem.assessment.specs import LoadControl, LoadingSpec, Objective, SearchSpec
 from masonry_fdem.assessment.tables import REQUIRED, Table, show
 from masonry_fdem.geometry.arches import ArchKind, arch_layout
 from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw

@@ -23,7 +23,8 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.assessment.assess import Assessment, assess
-from masonry_fdem.io.rundir import move_into, partial_folder, run_folder_problem
+from masonry_fdem.io.plot import save_load_curve
+from masonry_fdem.io.rundir import hand_over, partial_folder, run_folder_problem
 from masonry_fdem.assessment.case import (
     ArchCase,
     CaseError,
@@ -133,16 +134,7 @@ def compare(
             r1 = assess(anchored, out=tmp / "anchored", comm=comm, **kw)
         result = Comparison(case.name, r0, r1, r1.anchor_length)
         if write:
-            error = None
-            if comm.rank == 0:
-                try:
-                    _write_comparison(case, result, tmp)
-                    move_into(tmp, folder)
-                except Exception as exc:
-                    error = f"writing the run folder {folder}: {exc!r}"
-            error = comm.bcast(error, root=0)
-            if error:
-                raise RuntimeError(error)
+            hand_over(lambda t: _write_comparison(case, result, t), tmp, folder, comm)
             result.folder, result.report = folder, folder / "report.md"
             for r, sub in ((r0, "unstrengthened"), (r1, "anchored")):
                 r.folder, r.report = folder / sub, folder / sub / "report.md"
@@ -166,14 +158,7 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
         ax.plot(r.displacements * 1e3, r.loads / 1e3, "o-", ms=3, color=c,
                 label=f"{label}: {r.collapse_load / 1e3:.1f} kN")
         ax.axhline(r.collapse_load / 1e3, color=c, lw=0.6, ls=":")
-    ax.set_xlabel("displacement at the load line [mm]")
-    ax.set_ylabel("load [kN]")
-    ax.set_title(f"{case.name}: unstrengthened and anchored")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(tmp / "curves.png", dpi=120)
-    plt.close(fig)
+    save_load_curve(fig, ax, f"{case.name}: unstrengthened and anchored", tmp / "curves.png")
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
     for k, a in enumerate(r1.anchors):

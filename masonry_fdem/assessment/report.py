@@ -10,7 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from masonry_fdem.io.rundir import move_into, partial_folder
+from masonry_fdem.io.plot import save_load_curve
+from masonry_fdem.io.rundir import hand_over, partial_folder
 
 __all__ = ["write_run_folder"]
 
@@ -41,16 +42,7 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm) -> No
         plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
                     title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
                     joints=inter[1], anchors=anchors)
-        error = None
-        if comm.rank == 0:  # the other ranks must not wait for a rank that failed
-            try:
-                _write_rank0(case, res, tmp, mag)
-                move_into(tmp, folder)
-            except Exception as exc:
-                error = f"writing the run folder {folder}: {exc!r}"
-        error = comm.bcast(error, root=0)
-        if error:
-            raise RuntimeError(error)
+        hand_over(lambda t: _write_rank0(case, res, t, mag), tmp, folder, comm)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -94,14 +86,7 @@ def _write_rank0(case, res, tmp: Path, mag: float) -> None:
     for e in res.events:
         ax.annotate(str(e.order), (e.displacement * 1e3, e.load / 1e3), fontsize=7,
                     color="C2", xytext=(2, -9), textcoords="offset points")
-    ax.set_xlabel("displacement at the load line [mm]")
-    ax.set_ylabel("load [kN]")
-    ax.set_title(f"{case.name}: {res.control} control")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(tmp / "load_displacement.png", dpi=120)
-    plt.close(fig)
+    save_load_curve(fig, ax, f"{case.name}: {res.control} control", tmp / "load_displacement.png")
 
     layout = case.layout()
     fig, ax = plt.subplots(figsize=(7, 4))

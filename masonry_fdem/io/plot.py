@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_blocks"]
+__all__ = ["plot_blocks", "save_load_curve"]
 
 
 def _von_mises(sig: np.ndarray) -> np.ndarray:
@@ -149,3 +149,18 @@ def plot_blocks(
     fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def save_load_curve(fig, ax, title: str, path: Path) -> None:
+    """Label (load [kN] against the load-line displacement [mm]), grid, legend and save a
+    load–displacement plot, then close its figure."""
+    import matplotlib.pyplot as plt
+
+    ax.set_xlabel("displacement at the load line [mm]")
+    ax.set_ylabel("load [kN]")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

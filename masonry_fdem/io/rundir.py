@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
-__all__ = ["move_into", "partial_folder", "run_folder_problem"]
+__all__ = ["hand_over", "move_into", "partial_folder", "run_folder_problem"]
 
 
 def run_folder_problem(folder: Path, *, overwrite: bool = False, resume: bool | None = None,
@@ -59,3 +60,18 @@ def move_into(tmp: Path, folder: Path) -> None:
             shutil.rmtree(dest)
         f.replace(dest)
     tmp.rmdir()
+
+
+def hand_over(write: Callable[[Path], None], tmp: Path, folder: Path, comm: Any) -> None:
+    """On rank 0, ``write(tmp)`` and :func:`move_into` ``folder``; a failure there reaches
+    every rank as RuntimeError (no rank waits for one that failed; collective)."""
+    error = None
+    if comm.rank == 0:
+        try:
+            write(tmp)
+            move_into(tmp, folder)
+        except Exception as exc:
+            error = f"writing the run folder {folder}: {exc!r}"
+    error = comm.bcast(error, root=0)
+    if error:
+        raise RuntimeError(error)
