@@ -27,9 +27,16 @@ Calls a solver makes, and when:
 * ``energies()`` — its energies [J], global over ranks (collective): ``"stored"``
   (elastic energy held now) and ``"dissipated"`` (since the start), plus any details;
 * ``state()`` / ``set_state(s)`` — its complete state as named arrays (checkpoints);
-* ``add_tangent(K, state)`` — its consistent tangent ∂f/∂u into a PETSc matrix, for the
-  static Newton solver (the next step of the package: not implemented by any provider
-  yet; the default raises ``NotImplementedError``).
+* ``add_tangent(K, state)`` — at a Newton iteration of the static solver, after
+  ``update`` and ``add_forces`` at the same state: its consistent tangent −∂f/∂u into the
+  :class:`Tangent` collector ``K`` (entries by global dof number; the solver assembles
+  them into one PETSc matrix). The default raises ``NotImplementedError``: such an
+  interaction can be used by the explicit solver and dynamic relaxation only.
+
+In the static solver the ``State`` is *static*: ``state.v`` holds the displacement since
+the last commit and ``dt`` is 1, and every force must be a function of the committed
+history and the current displacement alone (backward Euler): a provider whose history
+evolves in place (friction springs) starts each evaluation from its committed history.
 
 A user's interaction is a subclass with ``add_forces`` and ``stable_omega2`` (and
 ``add_rowsum`` to be usable by dynamic relaxation); see ``docs/interactions.md``.
@@ -45,7 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["BLOCKS", "DofSet", "Interaction", "State"]
+__all__ = ["BLOCKS", "DofSet", "Interaction", "State", "Tangent"]
 
 BLOCKS = "blocks"  # the name of the block nodes' dof set (the model's displacement)
 
@@ -108,15 +115,74 @@ class State:
         dt: the step [s] (1 in dynamic relaxation, where ``v`` is the increment per
             iteration).
         damping: whether velocity-dependent forces act (False in dynamic relaxation).
+        static: the static solver's state: ``v`` is the displacement since the last
+            commit, ``dt`` is 1, and forces are functions of the committed history and
+            the current displacement (see the module doc).
     """
 
-    __slots__ = ("u", "v", "f", "dt", "damping")
+    __slots__ = ("u", "v", "f", "dt", "damping", "static")
 
     def __init__(self, u: dict[str, np.ndarray], v: dict[str, np.ndarray],
-                 f: dict[str, np.ndarray], dt: float, damping: bool):
+                 f: dict[str, np.ndarray], dt: float, damping: bool, static: bool = False):
         self.u, self.v, self.f = u, v, f
         self.dt = float(dt)
         self.damping = bool(damping)
+        self.static = bool(static)
+
+
+class Tangent:
+    """Collects the entries of a consistent tangent by global dof number (COO).
+
+    The static solver numbers every dof of the problem once across ranks: the block
+    nodes of each rank, then the dof sets the interactions own (held whole on every rank,
+    numbered after rank 0's block dofs). A provider adds −∂f/∂u of its forces with
+    :meth:`add`; repeated entries are summed, and an entry whose row another rank owns
+    (a pair across ranks) is sent there by PETSc: each entry must be added by ONE rank.
+
+    Attributes:
+        index: per dof-set name (``BLOCKS`` and the interactions' sets), the global
+            number of each local dof.
+        node_dof: per node of the BlockMesh (input numbering, every rank), the global
+            number of its x dof (its y dof is the next one): for ghost nodes.
+        rank: this rank (a replicated set's entries are added by rank 0 alone).
+    """
+
+    def __init__(self, index: Mapping[str, np.ndarray], node_dof: np.ndarray, rank: int = 0):
+        self.index = dict(index)
+        self.node_dof = node_dof
+        self.rank = int(rank)
+        self.rows: list[np.ndarray] = []
+        self.cols: list[np.ndarray] = []
+        self.vals: list[np.ndarray] = []
+
+    def add(self, rows: np.ndarray, cols: np.ndarray, values: np.ndarray) -> None:
+        """Add ``values[k]`` to entry (``rows[k]``, ``cols[k]``) (global dof numbers)."""
+        rows = np.asarray(rows, dtype=np.int64).ravel()
+        cols = np.asarray(cols, dtype=np.int64).ravel()
+        values = np.asarray(values, dtype=np.float64).ravel()
+        if not rows.size == cols.size == values.size:
+            raise ValueError(f"tangent entries: {rows.size} rows, {cols.size} columns, "
+                             f"{values.size} values")
+        self.rows.append(rows)
+        self.cols.append(cols)
+        self.vals.append(values)
+
+    def node_dofs(self, input_nodes: np.ndarray) -> np.ndarray:
+        """Global dof numbers (x, y interleaved) of BlockMesh nodes by input id."""
+        base = self.node_dof[np.asarray(input_nodes, dtype=np.int64)]
+        return (base[:, None] + np.arange(2)[None, :]).ravel()
+
+    def coo(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """All entries added so far (rows, columns, values)."""
+        if not self.rows:
+            z = np.zeros(0, dtype=np.int64)
+            return z, z.copy(), np.zeros(0)
+        return np.concatenate(self.rows), np.concatenate(self.cols), np.concatenate(self.vals)
+
+    def clear(self) -> None:
+        self.rows.clear()
+        self.cols.clear()
+        self.vals.clear()
 
 
 class Interaction(ABC):
@@ -140,8 +206,9 @@ class Interaction(ABC):
     def add_forces(self, state: State) -> None:
         """Add the forces [N] at the current positions into ``state.f``."""
 
-    def add_tangent(self, K, state: State) -> None:
-        """Add the consistent tangent −∂f/∂u into the PETSc matrix ``K`` (static solver)."""
+    def add_tangent(self, K: Tangent, state: State) -> None:
+        """Add the consistent tangent −∂f/∂u of its forces at ``state`` into ``K`` (a
+        :class:`Tangent`; static solver), after ``add_forces`` at the same state."""
         raise NotImplementedError(f"{type(self).__name__} has no consistent tangent yet")
 
     @abstractmethod

@@ -176,6 +176,8 @@ class Model:
         h_cells = np.sqrt(2.0 * self.blocks.cell_area)
         f_int = 0
         energy = 0
+        self._dxq = dxq
+        self._terms: list[tuple[int, Material, object]] = []  # (material id, law, P)
         for mid, name in enumerate(self.blocks.material_names):
             mat = self.materials[name]
             in_mat = self.blocks.cell_material == mid
@@ -195,12 +197,14 @@ class Model:
                 raise ValueError(f"material {name!r}: first_piola() must give a 2x2 UFL tensor")
             f_int += ufl.inner(P, ufl.grad(w)) * self.w_const * dxq(mid)
             energy += mat.energy_density(k) * self.w_const * dxq(mid)
+            self._terms.append((mid, mat, P))
         self.qstate.finalise()
         self.f_int_form = dolfinx.fem.form(f_int)
         self.energy_form = dolfinx.fem.form(energy)
         self._constants = dolfinx.fem.pack_constants(self.f_int_form)
         self._coeffs = dolfinx.fem.pack_coefficients(self.f_int_form)
         self._setup_packing(f_int)
+        self._tangent = None  # compiled on first use (static solver only)
         # Cauchy stress per cell for output: one expression per material on its cells,
         # at the quadrature point (one per cell: the DG0 value)
         self.S_space = dolfinx.fem.functionspace(mesh, ("DG", 0, (2, 2)))
@@ -490,6 +494,54 @@ class Model:
         out.fill(0.0)
         _cpp.fem.assemble_vector(out, self.f_int_form._cpp_object, self._constants, self._coeffs)
         return out
+
+    def tangent_form(self):
+        """The compiled consistent tangent ∂f_int/∂u (a bilinear dolfinx form).
+
+        A law written in UFL is differentiated by UFL (``ufl.derivative`` of its term of
+        the internal force: the algorithmic tangent of its history update included, as
+        UFL sees the trial history as a function of u). A return-mapping law enters as
+        ``∇δu S + F δS`` with ``δS = 𝔻 : ∇δu``, 𝔻 its algorithmic tangent at the quadrature
+        points (:meth:`QuadratureState.tangent`). Compiled once, on first use.
+        """
+        if self._tangent is None:
+            du = ufl.TrialFunction(self.V)
+            w = ufl.TestFunction(self.V)
+            a = 0
+            for mid, mat, P in self._terms:
+                term = ufl.inner(P, ufl.grad(w)) * self.w_const * self._dxq(mid)
+                if isinstance(mat, ReturnMapping):
+                    k = self.law_context[mid]
+                    gd = ufl.grad(du)
+                    dS = self.qstate.stress_variation(gd)
+                    a += ufl.inner(gd * k.stress + k.F * dS, ufl.grad(w)) * self.w_const \
+                        * self._dxq(mid)
+                else:
+                    a += ufl.derivative(term, self.u, du)
+            self._tangent_form = dolfinx.fem.form(a)
+            self._tangent = dolfinx.fem.create_matrix(
+                self._tangent_form, block_mode=dolfinx.la.BlockMode.expanded)
+            A = self._tangent
+            nrows = A.index_map(0).size_local * A.block_size[0]
+            self._tangent_rows = np.repeat(
+                np.arange(nrows, dtype=np.int64), np.diff(A.indptr[: nrows + 1]))
+            if A.index_map(1).num_ghosts:
+                raise RuntimeError("a block is split between ranks (ghost columns)")
+        return self._tangent_form
+
+    def tangent(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The consistent tangent ∂f_int/∂u [N/m] at the current u, as local COO triplets
+        (rows, columns, values) in local dof numbers (the blocks of a rank couple only
+        its own dofs). Call :meth:`internal_force` at the same u first (it updates the
+        return-mapping state)."""
+        form = self.tangent_form()
+        A = self._tangent
+        if self.qstate.has_return_mapping:
+            self.qstate.tangent()
+        A.data[:] = 0.0
+        dolfinx.fem.assemble_matrix(A, form)
+        n = self._tangent_rows.size
+        return self._tangent_rows, A.indices[:n].astype(np.int64), A.data[:n]
 
     def commit_state(self) -> None:
         """Accept the material state (history, plastic strain) at the current displacement.

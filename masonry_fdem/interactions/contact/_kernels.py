@@ -154,6 +154,133 @@ def _pass_zone(X, u, facets, fprev, fnext, fs, fm, depth, shift, work):
 
 
 @njit(cache=True)
+def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, hyst, depth,
+                 width, dt, tau, pmax, f, work, stick):
+    """Forces of candidate pair ``k`` added into ``f`` (see :func:`facet_facet_forces`).
+
+    ``stick``: no Coulomb return (the tangent at the apex of the friction cone, below).
+
+    Returns (normal penalty energy, tangential elastic energy, frictional dissipation
+    [J], whether a pass is active, the largest penetration of an active pass [m], −1 if
+    none).
+    """
+    e_n = 0.0
+    e_t = 0.0
+    d_f = 0.0
+    active = False
+    apex = -1.0
+    fa = pairs[k, 0]
+    fb = pairs[k, 1]
+    # cheap rejection: facets whose boxes are further apart than the largest
+    # penetration considered cannot be in contact
+    ax1, ay1 = _pos(X, u, facets[fa, 0])
+    ax2, ay2 = _pos(X, u, facets[fa, 1])
+    bx1, by1 = _pos(X, u, facets[fb, 0])
+    bx2, by2 = _pos(X, u, facets[fb, 1])
+    dk = depth[k]
+    if (min(ax1, ax2) > max(bx1, bx2) + dk or min(bx1, bx2) > max(ax1, ax2) + dk
+            or min(ay1, ay2) > max(by1, by2) + dk or min(by1, by2) > max(ay1, ay2) + dk):
+        tau[k, 0] = 0.0
+        tau[k, 1] = 0.0
+        pmax[k, 0] = 0.0
+        pmax[k, 1] = 0.0
+        return e_n, e_t, d_f, active, apex
+    for p in range(2):
+        fs = fb if p == 0 else fa
+        fm = fa if p == 0 else fb
+        s1n = facets[fs, 0]
+        s2n = facets[fs, 1]
+        m1n = facets[fm, 0]
+        m2n = facets[fm, 1]
+        q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_zone(
+            X, u, facets, fprev, fnext, fs, fm, depth[k], 0.0, work
+        )
+        if work[Z_ACTIVE] == 0.0:  # separated: the impact is over
+            tau[k, p] = 0.0
+            pmax[k, p] = 0.0
+            continue
+        shift = 0.0
+        if hyst[k] > 0.0:
+            pen = work[Z_PEN]
+            if pen > pmax[k, p]:
+                pmax[k, p] = pen  # loading
+            else:
+                shift = (pmax[k, p] - pen) * hyst[k]  # unloading
+                _pass_zone(X, u, facets, fprev, fnext, fs, fm, depth[k], shift, work)
+                if work[Z_ACTIVE] == 0.0:
+                    tau[k, p] = 0.0
+                    continue
+        active = True
+        s0 = work[Z_S0]
+        s1 = work[Z_S1]
+        zlen = work[Z_LEN]
+        lm = math.hypot(p2x - p1x, p2y - p1y)
+        tx = (p2x - p1x) / lm
+        ty = (p2y - p1y) / lm
+        nx = ty
+        ny = -tx
+        # each pass carries half of the pair's traction, faded out smoothly as the two
+        # facets turn from facing each other (within FACING of anti-parallel) to
+        # perpendicular, so a pass never switches on or off with a jump in force
+        ls = math.hypot(q2x - q1x, q2y - q1y)
+        cosf = ((q2x - q1x) * tx + (q2y - q1y) * ty) / ls  # < 0 when facing
+        half = 0.5 * min(1.0, -cosf / FACING)
+        # --- normal: exact integration of eps_n (−g − shift) N_i over the zone
+        fs1 = 0.0  # slave node 1, 2 normal force magnitudes (along +n_m)
+        fs2 = 0.0
+        fm1 = 0.0  # master node 1, 2
+        fm2 = 0.0
+        pot = 0.0
+        pbar = 0.0
+        for gp in range(2):
+            s = 0.5 * (s0 + s1) + (GAUSS if gp == 0 else -GAUSS) * (s1 - s0)
+            qx = q1x + s * (q2x - q1x)
+            qy = q1y + s * (q2y - q1y)
+            g = (qx - p1x) * nx + (qy - p1y) * ny + shift
+            xi = ((qx - p1x) * tx + (qy - p1y) * ty) / lm
+            wgt = 0.5 * zlen * width * half  # Gauss weight x length x width x pass
+            tr = -eps_n[k] * g  # >= 0
+            fs1 += wgt * tr * (1.0 - s)
+            fs2 += wgt * tr * s
+            fm1 += wgt * tr * (1.0 - xi)
+            fm2 += wgt * tr * xi
+            pot += wgt * 0.5 * eps_n[k] * g * g
+            pbar += 0.5 * tr
+        # --- relative tangential velocity at the zone centre
+        sc = 0.5 * (s0 + s1)
+        qcx = q1x + sc * (q2x - q1x)
+        qcy = q1y + sc * (q2y - q1y)
+        xic = ((qcx - p1x) * tx + (qcy - p1y) * ty) / lm
+        vt = ((1.0 - sc) * v[2 * s1n] + sc * v[2 * s2n]
+              - (1.0 - xic) * v[2 * m1n] - xic * v[2 * m2n]) * tx + (
+            (1.0 - sc) * v[2 * s1n + 1] + sc * v[2 * s2n + 1]
+            - (1.0 - xic) * v[2 * m1n + 1] - xic * v[2 * m2n + 1]) * ty
+        # --- friction: elastic predictor, Coulomb return on the mean normal traction
+        t_trial = tau[k, p] + eps_t[k] * vt * dt
+        t_max = mu[k] * pbar
+        apex = max(apex, work[Z_PEN])
+        if abs(t_trial) > t_max and not stick:
+            t_new = t_max if t_trial > 0.0 else -t_max
+            d_f += t_max * (abs(t_trial) - t_max) / eps_t[k] * zlen * width * half
+        else:
+            t_new = t_trial
+        tau[k, p] = t_new
+        e_t += 0.5 * t_new * t_new / eps_t[k] * zlen * width * half
+        e_n += pot
+        # friction traction, uniform over the zone, opposes the slave's slip
+        a = zlen * width * half * t_new
+        f[2 * s1n] += fs1 * nx - (1.0 - sc) * a * tx
+        f[2 * s1n + 1] += fs1 * ny - (1.0 - sc) * a * ty
+        f[2 * s2n] += fs2 * nx - sc * a * tx
+        f[2 * s2n + 1] += fs2 * ny - sc * a * ty
+        f[2 * m1n] -= fm1 * nx - (1.0 - xic) * a * tx
+        f[2 * m1n + 1] -= fm1 * ny - (1.0 - xic) * a * ty
+        f[2 * m2n] -= fm2 * nx - xic * a * tx
+        f[2 * m2n + 1] -= fm2 * ny - xic * a * ty
+    return e_n, e_t, d_f, active, apex
+
+
+@njit(cache=True)
 def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, hyst, depth,
                        width, dt, tau, pmax, f, energy, work):
     """Penalty normal and Coulomb friction forces of all candidate pairs.
@@ -175,115 +302,123 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, h
     e_t = 0.0
     d_f = 0.0
     for k in range(pairs.shape[0]):
-        fa = pairs[k, 0]
-        fb = pairs[k, 1]
-        # cheap rejection: facets whose boxes are further apart than the largest
-        # penetration considered cannot be in contact
-        ax1, ay1 = _pos(X, u, facets[fa, 0])
-        ax2, ay2 = _pos(X, u, facets[fa, 1])
-        bx1, by1 = _pos(X, u, facets[fb, 0])
-        bx2, by2 = _pos(X, u, facets[fb, 1])
-        dk = depth[k]
-        if (min(ax1, ax2) > max(bx1, bx2) + dk or min(bx1, bx2) > max(ax1, ax2) + dk
-                or min(ay1, ay2) > max(by1, by2) + dk or min(by1, by2) > max(ay1, ay2) + dk):
-            tau[k, 0] = 0.0
-            tau[k, 1] = 0.0
-            pmax[k, 0] = 0.0
-            pmax[k, 1] = 0.0
-            continue
-        for p in range(2):
-            fs = fb if p == 0 else fa
-            fm = fa if p == 0 else fb
-            s1n = facets[fs, 0]
-            s2n = facets[fs, 1]
-            m1n = facets[fm, 0]
-            m2n = facets[fm, 1]
-            q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_zone(
-                X, u, facets, fprev, fnext, fs, fm, depth[k], 0.0, work
-            )
-            if work[Z_ACTIVE] == 0.0:  # separated: the impact is over
-                tau[k, p] = 0.0
-                pmax[k, p] = 0.0
-                continue
-            shift = 0.0
-            if hyst[k] > 0.0:
-                pen = work[Z_PEN]
-                if pen > pmax[k, p]:
-                    pmax[k, p] = pen  # loading
-                else:
-                    shift = (pmax[k, p] - pen) * hyst[k]  # unloading
-                    _pass_zone(X, u, facets, fprev, fnext, fs, fm, depth[k], shift, work)
-                    if work[Z_ACTIVE] == 0.0:
-                        tau[k, p] = 0.0
-                        continue
-            s0 = work[Z_S0]
-            s1 = work[Z_S1]
-            zlen = work[Z_LEN]
-            lm = math.hypot(p2x - p1x, p2y - p1y)
-            tx = (p2x - p1x) / lm
-            ty = (p2y - p1y) / lm
-            nx = ty
-            ny = -tx
-            # each pass carries half of the pair's traction, faded out smoothly as the two
-            # facets turn from facing each other (within FACING of anti-parallel) to
-            # perpendicular, so a pass never switches on or off with a jump in force
-            ls = math.hypot(q2x - q1x, q2y - q1y)
-            cosf = ((q2x - q1x) * tx + (q2y - q1y) * ty) / ls  # < 0 when facing
-            half = 0.5 * min(1.0, -cosf / FACING)
-            # --- normal: exact integration of eps_n (−g − shift) N_i over the zone
-            fs1 = 0.0  # slave node 1, 2 normal force magnitudes (along +n_m)
-            fs2 = 0.0
-            fm1 = 0.0  # master node 1, 2
-            fm2 = 0.0
-            pot = 0.0
-            pbar = 0.0
-            for gp in range(2):
-                s = 0.5 * (s0 + s1) + (GAUSS if gp == 0 else -GAUSS) * (s1 - s0)
-                qx = q1x + s * (q2x - q1x)
-                qy = q1y + s * (q2y - q1y)
-                g = (qx - p1x) * nx + (qy - p1y) * ny + shift
-                xi = ((qx - p1x) * tx + (qy - p1y) * ty) / lm
-                wgt = 0.5 * zlen * width * half  # Gauss weight x length x width x pass
-                tr = -eps_n[k] * g  # >= 0
-                fs1 += wgt * tr * (1.0 - s)
-                fs2 += wgt * tr * s
-                fm1 += wgt * tr * (1.0 - xi)
-                fm2 += wgt * tr * xi
-                pot += wgt * 0.5 * eps_n[k] * g * g
-                pbar += 0.5 * tr
-            # --- relative tangential velocity at the zone centre
-            sc = 0.5 * (s0 + s1)
-            qcx = q1x + sc * (q2x - q1x)
-            qcy = q1y + sc * (q2y - q1y)
-            xic = ((qcx - p1x) * tx + (qcy - p1y) * ty) / lm
-            vt = ((1.0 - sc) * v[2 * s1n] + sc * v[2 * s2n]
-                  - (1.0 - xic) * v[2 * m1n] - xic * v[2 * m2n]) * tx + (
-                (1.0 - sc) * v[2 * s1n + 1] + sc * v[2 * s2n + 1]
-                - (1.0 - xic) * v[2 * m1n + 1] - xic * v[2 * m2n + 1]) * ty
-            # --- friction: elastic predictor, Coulomb return on the mean normal traction
-            t_trial = tau[k, p] + eps_t[k] * vt * dt
-            t_max = mu[k] * pbar
-            if abs(t_trial) > t_max:
-                t_new = t_max if t_trial > 0.0 else -t_max
-                d_f += t_max * (abs(t_trial) - t_max) / eps_t[k] * zlen * width * half
-            else:
-                t_new = t_trial
-            tau[k, p] = t_new
-            e_t += 0.5 * t_new * t_new / eps_t[k] * zlen * width * half
-            e_n += pot
-            # friction traction, uniform over the zone, opposes the slave's slip
-            a = zlen * width * half * t_new
-            f[2 * s1n] += fs1 * nx - (1.0 - sc) * a * tx
-            f[2 * s1n + 1] += fs1 * ny - (1.0 - sc) * a * ty
-            f[2 * s2n] += fs2 * nx - sc * a * tx
-            f[2 * s2n + 1] += fs2 * ny - sc * a * ty
-            f[2 * m1n] -= fm1 * nx - (1.0 - xic) * a * tx
-            f[2 * m1n + 1] -= fm1 * ny - (1.0 - xic) * a * ty
-            f[2 * m2n] -= fm2 * nx - xic * a * tx
-            f[2 * m2n + 1] -= fm2 * ny - xic * a * ty
+        a, b, c, _, _ = _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t,
+                                     mu, hyst, depth, width, dt, tau, pmax, f, work, False)
+        e_n += a
+        e_t += b
+        d_f += c
     energy[0] = e_n
     energy[1] = e_t
     energy[2] = d_f
+
+
+@njit(cache=True)
+def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, hyst, depth,
+                        width, tau_c, pmax_c, tau, pmax, h, fbuf, work, rows, cols, vals):
+    """Consistent tangent −∂f/∂u of the pairs in contact, by central differences of
+    :func:`_pair_forces` in each dof the pair's force depends on (its two facets' nodes
+    and, through the corner rules, the far nodes of their neighbouring facets).
+
+    Static solver convention: ``v`` is the displacement since the last commit (dt = 1),
+    so a perturbation of u perturbs v alike, and each evaluation starts from the
+    committed history ``tau_c``, ``pmax_c``; ``tau``, ``pmax`` are left as they were.
+    ``fbuf`` (2 n) must be zero on entry and is zero on exit.
+
+    At the apex of the friction cone — facets touching with no normal traction, as the
+    joints of a dry structure at its unloaded start — the force is not differentiable:
+    any slip slides, so the one-sided derivatives give no shear stiffness and the
+    tangent of a structure on such joints is singular. There the tangent takes the stick
+    branch, the limit of the tangents of the nearby compressed states that stick (an
+    element of Clarke's generalised Jacobian, as a semismooth Newton method allows).
+
+    Returns the number of COO entries written into ``rows``, ``cols`` (local extended dof
+    numbers) and ``vals`` (each needs 128 entries per pair).
+    """
+    nodes = np.empty(8, dtype=np.int64)
+    fp = np.empty(8)
+    nent = 0
+    for k in range(pairs.shape[0]):
+        t0 = tau[k, 0]
+        t1 = tau[k, 1]
+        q0 = pmax[k, 0]
+        q1 = pmax[k, 1]
+        tau[k, 0] = tau_c[k, 0]
+        tau[k, 1] = tau_c[k, 1]
+        pmax[k, 0] = pmax_c[k, 0]
+        pmax[k, 1] = pmax_c[k, 1]
+        _, _, _, active, apex = _pair_forces(k, X, u, v, facets, fprev, fnext, pairs,
+                                             eps_n, eps_t, mu, hyst, depth, width, 1.0, tau,
+                                             pmax, fbuf, work, False)
+        fa = pairs[k, 0]
+        fb = pairs[k, 1]
+        nodes[0] = facets[fa, 0]
+        nodes[1] = facets[fa, 1]
+        nodes[2] = facets[fb, 0]
+        nodes[3] = facets[fb, 1]
+        for j in range(4):
+            fbuf[2 * nodes[j]] = 0.0
+            fbuf[2 * nodes[j] + 1] = 0.0
+        # a pair out of reach of the perturbations has no tangent; one that is not in
+        # contact but within reach (touching, up to round-off) is treated as at the apex
+        ax1, ay1 = _pos(X, u, nodes[0])
+        ax2, ay2 = _pos(X, u, nodes[1])
+        bx1, by1 = _pos(X, u, nodes[2])
+        bx2, by2 = _pos(X, u, nodes[3])
+        dk = depth[k] + 4.0 * h
+        near = not (min(ax1, ax2) > max(bx1, bx2) + dk or min(bx1, bx2) > max(ax1, ax2) + dk
+                    or min(ay1, ay2) > max(by1, by2) + dk
+                    or min(by1, by2) > max(ay1, ay2) + dk)
+        stick = apex < 2.0 * h  # touching within the step, or not touching
+        if near:
+            nodes[4] = facets[fprev[fa], 0]
+            nodes[5] = facets[fnext[fa], 1]
+            nodes[6] = facets[fprev[fb], 0]
+            nodes[7] = facets[fnext[fb], 1]
+            nn = 4
+            for j in range(4, 8):  # the distinct far nodes
+                dup = False
+                for i in range(nn):
+                    if nodes[i] == nodes[j]:
+                        dup = True
+                if not dup:
+                    nodes[nn] = nodes[j]
+                    nn += 1
+            for jc in range(nn):
+                for c in range(2):
+                    d = 2 * nodes[jc] + c
+                    u0 = u[d]
+                    v0 = v[d]
+                    for side in range(2):
+                        sg = 1.0 if side == 0 else -1.0
+                        u[d] = u0 + sg * h
+                        v[d] = v0 + sg * h
+                        tau[k, 0] = tau_c[k, 0]
+                        tau[k, 1] = tau_c[k, 1]
+                        pmax[k, 0] = pmax_c[k, 0]
+                        pmax[k, 1] = pmax_c[k, 1]
+                        _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t,
+                                     mu, hyst, depth, width, 1.0, tau, pmax, fbuf, work, stick)
+                        for i in range(4):
+                            for ci in range(2):
+                                di = 2 * nodes[i] + ci
+                                if side == 0:
+                                    fp[2 * i + ci] = fbuf[di]
+                                else:
+                                    fp[2 * i + ci] -= fbuf[di]
+                                fbuf[di] = 0.0
+                    u[d] = u0
+                    v[d] = v0
+                    for i in range(4):
+                        for ci in range(2):
+                            rows[nent] = 2 * nodes[i] + ci
+                            cols[nent] = d
+                            vals[nent] = -fp[2 * i + ci] / (2.0 * h)
+                            nent += 1
+        tau[k, 0] = t0
+        tau[k, 1] = t1
+        pmax[k, 0] = q0
+        pmax[k, 1] = q1
+    return nent
 
 
 def precompile() -> None:
@@ -297,3 +432,8 @@ def precompile() -> None:
     facet_facet_forces(X, u, u, facets, fprev, fnext, np.array([[0, 2]], dtype=np.int64), p1,
                        p1, p1, p1, p1, 1.0, 1e-3, np.zeros((1, 2)), np.zeros((1, 2)),
                        np.zeros(8), np.zeros(3), np.zeros(N_WORK))
+    z = np.zeros((1, 2))
+    facet_facet_tangent(X, u, u.copy(), facets, fprev, fnext, np.array([[0, 2]], dtype=np.int64),
+                        p1, p1, p1, p1, p1, 1.0, z, z.copy(), z.copy(), z.copy(), 1e-6,
+                        np.zeros(8), np.zeros(N_WORK), np.zeros(128, dtype=np.int64),
+                        np.zeros(128, dtype=np.int64), np.zeros(128))

@@ -110,13 +110,16 @@ class BlockContact(Interaction):
 
     An :class:`~masonry_fdem.interactions.protocol.Interaction`: its history, the
     tangential spring and the largest penetration of every pair by pair key, evolves in
-    place (``commit`` and ``restore`` have nothing to do); ``set_state`` brings a saved
-    one back and finds the candidates again.
+    place in explicit and dynamic-relaxation runs; ``commit`` keeps a copy, from which a
+    static (Newton) evaluation starts (backward Euler: the slip is the displacement since
+    the commit) and to which ``restore`` returns; ``set_state`` brings a saved state back
+    and finds the candidates again. ``add_tangent``: the consistent tangent, by central
+    differences of the pair kernel (stick and slip; see ``_kernels.facet_facet_tangent``).
     """
 
     name = "contact"
-    state_attributes = ("keys", "tau", "pmax", "excluded", "bonded_block", "energy",
-                        "dissipated", "rebuilds")
+    state_attributes = ("keys", "tau", "pmax", "tau_c", "pmax_c", "excluded",
+                        "bonded_block", "energy", "dissipated", "rebuilds")
 
     def __init__(self, model, settings: ContactSettings | None = None):
         self.model = model
@@ -169,6 +172,8 @@ class BlockContact(Interaction):
         self.pairs = np.zeros((0, 2), dtype=np.int64)
         self.tau = np.zeros((0, 2))
         self.pmax = np.zeros((0, 2))
+        self.tau_c = np.zeros((0, 2))
+        self.pmax_c = np.zeros((0, 2))
         self.keys = np.zeros(0, dtype=np.int64)
         # facet-pair keys (min·n + max of global facet ids) left out: bonded joints
         self.excluded = np.zeros(0, dtype=np.int64)
@@ -180,6 +185,7 @@ class BlockContact(Interaction):
         self.since = 0
         self.rebuilds = 0
         self.exchange = None
+        self._u_rebuild = np.zeros(2 * model.n_nodes)
         self._build_extended(np.zeros(0, dtype=np.int64), [np.zeros(0, np.int64)] * comm.size)
 
     # ------------------------------------------------------------------ extended arrays
@@ -195,6 +201,7 @@ class BlockContact(Interaction):
         gids = np.r_[self.local_gid, ghost_gid, extra].astype(np.int64)
         self.n_candidates = self.local_gid.size + ghost_gid.size
         self.ext_gid = gids
+        self._ext_dofs = None  # global dof numbers of the extended nodes (static solver)
         # ghost nodes, grouped by owner rank in sorted input order (the owner agrees)
         recv_nodes = []
         for r in range(comm.size):
@@ -206,6 +213,7 @@ class BlockContact(Interaction):
         ghost_nodes = np.concatenate(recv_nodes) if recv_nodes else np.zeros(0, np.int64)
         node_map = self._input_to_local.copy()
         node_map[ghost_nodes] = nloc + np.arange(ghost_nodes.size)
+        self.ext_input = np.r_[self.model.node_input, ghost_nodes].astype(np.int64)
         self.facets = np.ascontiguousarray(node_map[self.g_facets[gids]])
         pos = np.full(self.g_facets.shape[0], -1, dtype=np.int64)
         pos[gids] = np.arange(gids.size)
@@ -344,18 +352,19 @@ class BlockContact(Interaction):
         if self.excluded.size and keys.size:
             free = ~np.isin(keys, self.excluded)
             pairs, keys = pairs[free], keys[free]
-        tau = np.zeros((pairs.shape[0], 2))
-        pmax = np.zeros((pairs.shape[0], 2))
+        hist = [np.zeros((pairs.shape[0], 2)) for _ in range(4)]
         if self.keys.size and keys.size:
             pos = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
             hit = self.keys[pos] == keys
-            tau[hit] = self.tau[pos[hit]]
-            pmax[hit] = self.pmax[pos[hit]]
+            for new, old in zip(hist, (self.tau, self.pmax, self.tau_c, self.pmax_c),
+                                strict=True):
+                if old.shape[0] == self.keys.size:
+                    new[hit] = old[pos[hit]]
         order = np.argsort(keys, kind="stable")
         self.pairs = np.ascontiguousarray(pairs[order])
         self.keys = keys[order]
-        self.tau = np.ascontiguousarray(tau[order])
-        self.pmax = np.ascontiguousarray(pmax[order])
+        self.tau, self.pmax, self.tau_c, self.pmax_c = (
+            np.ascontiguousarray(h[order]) for h in hist)
         ma = self.facet_material[self.pairs[:, 0]]
         mb = self.facet_material[self.pairs[:, 1]]
         self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
@@ -372,11 +381,20 @@ class BlockContact(Interaction):
         self.travel = 0.0
         self.since = 0
         self.rebuilds += 1
+        self._u_rebuild[:] = self.model.u.x.array[: self._u_rebuild.size]
 
     def update(self, state: State) -> None:
         """Rebuild when due, or when the relative travel could exceed the margin (the
         block velocities of ``state`` [m/s] over its step ``dt`` [s]; collective)."""
         v, dt = state.v[BLOCKS], state.dt
+        if state.static:
+            # a static evaluation: the travel is the displacement since the last rebuild
+            moved = 2.0 * max_speed(state.u[BLOCKS][: self._u_rebuild.size] - self._u_rebuild)
+            if (self.since >= self.settings.rebuild_every or self.travel == math.inf
+                    or self.comm.allreduce(moved, op=MPI.MAX) > self.margin):
+                self.rebuild(v)
+            self.since += 1
+            return
         step_travel = 2.0 * max_speed(v) * dt
         step_travel = self.comm.allreduce(step_travel, op=MPI.MAX)
         if (self.since >= self.settings.rebuild_every
@@ -393,6 +411,10 @@ class BlockContact(Interaction):
         f, v, dt, damping = state.f[BLOCKS], state.v[BLOCKS], state.dt, state.damping
         self._sync(v)
         self.f.fill(0.0)
+        if state.static:  # backward Euler from the committed history
+            self.tau[:] = self.tau_c
+            self.pmax[:] = self.pmax_c
+            dt = 1.0
         K.facet_facet_forces(
             self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
             self.eps_n, self.eps_t, self.mu, self.hyst_p if damping else self._no_damping,
@@ -404,6 +426,44 @@ class BlockContact(Interaction):
         if self.exchange is not None and self.comm.size > 1:
             self.exchange.reverse(self.f[nloc:].reshape(-1, 2), f[:nloc].reshape(-1, 2))
         self.dissipated += self.energy[2]
+
+    def add_tangent(self, tangent, state: State) -> None:
+        """The consistent tangent −∂f/∂u [N/m] of the pairs in contact into ``tangent`` (the
+        positions of the last ``add_forces``; a cross-rank pair by the rank computing it,
+        its rows of the other rank's nodes sent by PETSc)."""
+        if self._ext_dofs is None or self._ext_dofs.size != self.u.size:
+            self._ext_dofs = tangent.node_dofs(self.ext_input)
+        n = self.pairs.shape[0]
+        rows = np.empty(128 * n, dtype=np.int64)
+        cols = np.empty(128 * n, dtype=np.int64)
+        vals = np.empty(128 * n)
+        fbuf = np.zeros_like(self.f)
+        nent = K.facet_facet_tangent(
+            self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
+            self.eps_n, self.eps_t, self.mu, self._no_damping, self.depth, self.model.width,
+            self.tau_c, self.pmax_c, self.tau, self.pmax, self.fd_step, fbuf, self._work,
+            rows, cols, vals)
+        tangent.add(self._ext_dofs[rows[:nent]], self._ext_dofs[cols[:nent]], vals[:nent])
+
+    @property
+    def fd_step(self) -> float:
+        """Finite-difference step [m] of the tangent: 1e-9 of the mean facet length. It
+        must lie well below the penetrations (a stiff penalty under self-weight
+        penetrates ~1e-8 m); the force is piecewise polynomial in the positions, so the
+        truncation error is nil, and the round-off of X + u (~1e-16 m per metre of
+        coordinate) costs ~1e-6 of the stiffness."""
+        return 1e-9 * self.h
+
+    def commit(self) -> None:
+        """Keep the tangential history as the committed one (static evaluations start
+        from it)."""
+        self.tau_c[:] = self.tau
+        self.pmax_c[:] = self.pmax
+
+    def restore(self) -> None:
+        """Back to the committed tangential history."""
+        self.tau[:] = self.tau_c
+        self.pmax[:] = self.pmax_c
 
     def energies(self) -> dict[str, float]:
         """Stored normal/tangential penalty energy and frictional dissipation [J]

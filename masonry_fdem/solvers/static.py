@@ -1,0 +1,683 @@
+"""Static equilibrium by Newton's method on PETSc SNES, with consistent tangents.
+
+The residual of the whole problem,
+
+    r(u, λ) = f_int(u) − f_interactions(u) − f_dead − λ f_live,
+
+and its consistent tangent ``K = ∂r/∂u`` are assembled into PETSc objects with one dof
+numbering across ranks (the block nodes of each rank, then the dof sets the interactions
+own, such as anchor bar nodes, numbered after rank 0's block dofs): the blocks by dolfinx
+(the UFL derivative of the internal force, with the algorithmic tangent of return-mapped
+laws, :meth:`~masonry_fdem.model.Model.tangent`), every interaction through
+``add_tangent`` (:class:`~masonry_fdem.interactions.protocol.Tangent`). The matrix is an
+AIJ matrix preallocated from the entries' coordinates (PETSc's COO assembly: an entry a
+rank adds for a row another rank owns is sent there), re-preallocated whenever the set
+of entries changes (new contact candidates, a joint handed over to contact).
+
+Each load increment is solved by SNES (Newton with a line search; LU by MUMPS, in
+parallel too). The options are PETSc's, under a prefix (``static_`` by default), so a
+user may change the line search or the linear solver from the command line, e.g.
+``-static_snes_linesearch_type bt -static_pc_factor_mat_solver_type superlu_dist
+-static_snes_monitor``. Convergence: the residual norm over the free dofs below
+``rtol`` times the norm of the applied forces (dead, live and support reactions).
+
+Prescribed dofs (supports, a loading platen, a pulled anchor end) hold their values: their
+residual rows are zero and their rows and columns of K are those of the identity.
+History — plastic strain, damage, joint softening, friction, anchor bond and steel — is
+committed only when an increment has converged: every force evaluation starts from the
+committed history and the current displacement (backward Euler), so a failed increment is
+undone by going back to the committed displacement, and cut back.
+
+Units: SI (N, m).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+from mpi4py import MPI
+
+import numpy as np
+
+import masonry_fdem._compat  # noqa: F401  (dolfinx_solver before petsc4py)
+from petsc4py import PETSc
+
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tangent
+from masonry_fdem.solvers._setup import as_interactions, owned_dofsets
+from masonry_fdem.solvers.status import RunStatus, Status
+
+__all__ = ["StaticSolver", "NewtonResult", "StaticRun"]
+
+log = logging.getLogger(__name__)
+
+#: PETSc options set under the solver's prefix unless the user set them
+DEFAULT_OPTIONS = {
+    "snes_type": "newtonls",
+    "snes_linesearch_type": "cp",
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+    "pc_factor_mat_solver_type": "mumps",
+}
+
+
+@dataclass(frozen=True)
+class NewtonResult:
+    """Outcome of one load increment.
+
+    Attributes:
+        load_factor: factor on the live loads.
+        converged: equilibrium found (SNES converged).
+        iterations: Newton iterations.
+        residual: final residual norm over the free dofs [N].
+        reference: the force norm it is compared to [N].
+        reason: SNES's converged/diverged reason (name).
+        history: the residual norm [N] at each iteration (the first: before any step).
+    """
+
+    load_factor: float
+    converged: bool
+    iterations: int
+    residual: float
+    reference: float
+    reason: str
+    history: tuple[float, ...] = ()
+
+    @property
+    def relative_residual(self) -> float:
+        return self.residual / self.reference if self.reference > 0 else self.residual
+
+
+@dataclass
+class StaticRun:
+    """Outcome of :meth:`StaticSolver.load_to_collapse`.
+
+    Attributes:
+        status: the run's :class:`~masonry_fdem.solvers.status.RunStatus`.
+        load_factors: the converged load factors, in order (the start first).
+        iterations: Newton iterations of each converged increment.
+        results: every increment tried (converged or not).
+    """
+
+    status: RunStatus
+    load_factors: list[float] = field(default_factory=list)
+    iterations: list[int] = field(default_factory=list)
+    results: list[NewtonResult] = field(default_factory=list)
+
+    @property
+    def collapse_load_factor(self) -> float | None:
+        """The collapse load factor if the run proved one (else None)."""
+        return self.status.collapse_load
+
+
+class _Set:
+    """The static solver's view of one dof set: unknowns, committed values, forces."""
+
+    def __init__(self, name, u, f, f_ext, presc, prescriptions, start, size):
+        self.name, self.u, self.f, self.f_ext = name, u, f, f_ext
+        self.presc = presc
+        self.prescriptions = prescriptions
+        self.sl = slice(start, start + size)  # its block of the local PETSc vector
+        self.uc = u.copy()  # committed
+        self.v = np.zeros_like(u)  # u − uc
+
+
+class StaticSolver:
+    """Newton's method on PETSc SNES for the equilibrium of a model (see module doc).
+
+    Args:
+        model: the :class:`~masonry_fdem.model.Model` (its ``u`` is the unknown).
+        interactions: the interactions (contact, joints, anchors, a user's); each must
+            implement ``add_tangent``. Disks are not supported (granular fill: use
+            :class:`~masonry_fdem.solvers.DynamicRelaxation`).
+        rtol: residual tolerance relative to the applied force norm (the force
+            evaluation has a round-off floor of ~k·1e-16 m per node, k its penalty
+            stiffness: ~1e-7 of the load for a stiff dry arch under self-weight).
+        max_it: Newton iterations per increment.
+        options_prefix: the PETSc options prefix of the SNES (and its KSP/PC).
+        options: PETSc options to set under the prefix (override the defaults; the
+            command line overrides both).
+
+    Raises:
+        ValueError: an interaction's dof set is distributed over ranks (disks).
+    """
+
+    def __init__(
+        self,
+        model,
+        *,
+        interactions: Interaction | Sequence[Interaction] | None = None,
+        rtol: float = 1e-6,
+        max_it: int = 25,
+        options_prefix: str = "static_",
+        options: Mapping[str, object] | None = None,
+    ):
+        if not rtol > 0:
+            raise ValueError(f"rtol must be > 0, got {rtol}")
+        if max_it < 1:
+            raise ValueError(f"max_it must be >= 1, got {max_it}")
+        self.model = model
+        self.comm = comm = model.comm
+        self.rtol = float(rtol)
+        self.max_it = int(max_it)
+        self.interactions = as_interactions(interactions)
+        owned = owned_dofsets(self.interactions)
+        for name, ds in owned.items():
+            if not ds.replicated:
+                raise ValueError(
+                    f"dof set {name!r} is distributed over ranks (disks): the static "
+                    "Newton solver does not take it; use DynamicRelaxation")
+        # ---- numbering: this rank's block dofs, then (rank 0) the replicated sets
+        nb = model.f_int.size
+        n_sets = sum(ds.u.size for ds in owned.values())
+        nloc = nb + (n_sets if comm.rank == 0 else 0)
+        start = comm.exscan(nloc) or 0
+        self.n_local, self.start = nloc, start
+        self.n_global = comm.allreduce(nloc)
+        nb0 = comm.bcast(nb if comm.rank == 0 else None, root=0)
+        index = {BLOCKS: start + np.arange(nb, dtype=np.int64)}
+        self.f_ext = np.zeros(nb)
+        self.f_b = np.zeros(nb)  # interaction forces on the blocks
+        self.presc, _ = model.prescribed_arrays(0.0)
+        self.sets = [_Set(BLOCKS, model.u.x.array[:nb], self.f_b, self.f_ext, self.presc,
+                          {}, 0, nb)]
+        off = nb0
+        for name, ds in owned.items():
+            index[name] = off + np.arange(ds.u.size, dtype=np.int64)
+            self.sets.append(_Set(name, ds.u, ds.f, ds.f_ext, ds.presc, ds.prescriptions,
+                                  nb + (off - nb0), ds.u.size))
+            off += ds.u.size
+        parts = comm.allgather((model.node_input, index[BLOCKS][0::2]))
+        node_dof = np.full(model.blocks.n_nodes, -1, dtype=np.int64)
+        for ids, dofs in parts:
+            node_dof[ids] = dofs
+        self.tangent_collector = Tangent(index, node_dof, comm.rank)
+        self.index = index
+        # global numbers of this rank's prescribed dofs (rows and columns of the identity)
+        pg = [index[BLOCKS][self.presc != 0]]
+        if comm.rank == 0:
+            pg += [index[s.name][s.presc != 0] for s in self.sets[1:]]
+        self._presc_global = np.concatenate(pg).astype(PETSc.IntType)
+        self._state = State({s.name: s.u for s in self.sets}, {s.name: s.v for s in self.sets},
+                            {s.name: s.f for s in self.sets}, 1.0, False, static=True)
+        # ---- PETSc objects
+        self.x = PETSc.Vec().createMPI((nloc, self.n_global), comm=comm)
+        self.F = self.x.duplicate()
+        self.J = PETSc.Mat().create(comm=comm)
+        self.J.setSizes(((nloc, self.n_global), (nloc, self.n_global)))
+        self.J.setType(PETSc.Mat.Type.AIJ)
+        self._pattern: tuple[np.ndarray, np.ndarray] | None = None
+        self.pattern_builds = 0
+        self.snes = PETSc.SNES().create(comm=comm)
+        self.snes.setOptionsPrefix(options_prefix)
+        opts = PETSc.Options()
+        self._prefix = options_prefix
+        chosen = {**DEFAULT_OPTIONS, **(options or {})}
+        for key, value in chosen.items():
+            if options and key in options or not opts.hasName(options_prefix + key):
+                opts[options_prefix + key] = value
+        self.snes.setFunction(self._residual_cb, self.F)
+        self.snes.setJacobian(self._jacobian_cb, self.J)
+        self.snes.setConvergenceTest(self._converged_cb)
+        self.snes.setTolerances(max_it=self.max_it)
+        self.snes.setFromOptions()
+        self.snes.getKSP().setFromOptions()
+        self._x_at_forces = np.full(nloc, np.nan)
+        self._load_factor = 0.0
+        #: the load factor of the committed state
+        self.load_factor = 0.0
+        self._ref = 1.0
+        self._history: list[float] = []
+        self.results: list[NewtonResult] = []
+        self.u_committed = self.sets[0].uc
+
+    # ------------------------------------------------------------------ state <-> vector
+    def _gather(self, out: np.ndarray) -> None:
+        """The dofs of every set into a local PETSc array."""
+        for s in self.sets:
+            if s.name == BLOCKS or self.comm.rank == 0:
+                out[s.sl] = s.u
+
+    def _scatter(self, xa: np.ndarray) -> None:
+        """A local PETSc array into the dofs of every set (the replicated sets from
+        rank 0 to all)."""
+        nb = self.sets[0].u.size
+        self.sets[0].u[:] = xa[:nb]
+        if len(self.sets) > 1:
+            if self.comm.rank == 0:
+                buf = np.ascontiguousarray(xa[nb:])
+            else:
+                buf = np.empty(sum(s.u.size for s in self.sets[1:]))
+            if self.comm.size > 1:
+                self.comm.Bcast(buf, root=0)
+            for s in self.sets[1:]:
+                s.u[:] = buf[s.sl.start - nb:s.sl.stop - nb]
+
+    # ------------------------------------------------------------------ residual
+    def _forces(self) -> None:
+        """Internal and interaction forces at the current dofs (collective)."""
+        m = self.model
+        for s in self.sets:
+            np.subtract(s.u, s.uc, out=s.v)
+        m.internal_force(m.f_int)
+        self.f_b.fill(0.0)
+        for s in self.sets[1:]:
+            s.f.fill(0.0)
+        for c in self.interactions:
+            c.update(self._state)
+            c.add_forces(self._state)
+
+    def _residual_into(self, out: np.ndarray) -> None:
+        """r over every set into the local array ``out`` (zero at prescribed dofs)."""
+        m = self.model
+        b = self.sets[0]
+        r = out[b.sl]
+        np.subtract(m.f_int, self.f_b, out=r)
+        r -= self.f_ext
+        r[b.presc != 0] = 0.0
+        if self.comm.rank == 0:
+            for s in self.sets[1:]:
+                rs = out[s.sl]
+                np.negative(s.f, out=rs)
+                rs -= s.f_ext
+                rs[s.presc != 0] = 0.0
+
+    def _residual_cb(self, snes, x, F) -> None:
+        xa = x.getArray(readonly=True)
+        self._scatter(xa)
+        self._forces()
+        self._x_at_forces[:] = xa
+        self._residual_into(F.array)
+
+    # ------------------------------------------------------------------ tangent
+    def _jacobian_cb(self, snes, x, J, P) -> None:
+        xa = x.getArray(readonly=True)
+        if not np.array_equal(xa, self._x_at_forces):
+            self._scatter(xa)
+            self._forces()
+            self._x_at_forces[:] = xa
+        self.assemble_tangent()
+
+    def assemble_tangent(self) -> PETSc.Mat:
+        """K = ∂r/∂u at the state of the last force evaluation into ``self.J``."""
+        T = self.tangent_collector
+        T.clear()
+        rows, cols, vals = self.model.tangent()
+        ib = self.index[BLOCKS]
+        T.add(ib[rows], ib[cols], vals)
+        for c in self.interactions:
+            try:
+                c.add_tangent(T, self._state)
+            except NotImplementedError as err:
+                raise NotImplementedError(
+                    f"{type(c).__name__} has no consistent tangent, so the static Newton "
+                    "solver cannot take it; use DynamicRelaxation") from err
+        # the diagonal of every local dof, so the pattern holds the prescribed rows' 1s
+        own = np.arange(self.start, self.start + self.n_local, dtype=np.int64)
+        T.add(own, own, np.zeros(own.size))
+        r, c, v = T.coo()
+        r = r.astype(PETSc.IntType, copy=False)
+        c = c.astype(PETSc.IntType, copy=False)
+        if (self._pattern is None or self._pattern[0].size != r.size
+                or not np.array_equal(self._pattern[0], r)
+                or not np.array_equal(self._pattern[1], c)):
+            self.J.setPreallocationCOO(r, c)
+            self.J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+            self._pattern = (r.copy(), c.copy())
+            self.pattern_builds += 1
+        self.J.setValuesCOO(v, addv=PETSc.InsertMode.INSERT_VALUES)
+        self.J.assemble()
+        if self.comm.allreduce(self._presc_global.size):
+            self.J.zeroRowsColumns(self._presc_global, diag=1.0)
+        return self.J
+
+    # ------------------------------------------------------------------ convergence
+    def _converged_cb(self, snes, it, norms):
+        _, _, fnorm = norms
+        if it == 0:
+            self._history = []
+        self._history.append(float(fnorm))
+        if not math.isfinite(fnorm):
+            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN
+        if fnorm <= self.rtol * self._ref:
+            return PETSc.SNES.ConvergedReason.CONVERGED_FNORM_ABS
+        if it >= self.max_it:
+            return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
+        return PETSc.SNES.ConvergedReason.ITERATING
+
+    def _reference(self) -> float:
+        """The force norm of the tolerance: applied forces on the free dofs and the
+        reactions at the prescribed ones (collective; at the current state)."""
+        m = self.model
+        b = self.sets[0]
+        free = b.presc == 0
+        reac = m.f_int - self.f_b - self.f_ext
+        loc = float(np.dot(self.f_ext[free], self.f_ext[free]))
+        loc += float(np.dot(reac[~free], reac[~free]))
+        tot = self.comm.allreduce(loc)
+        for s in self.sets[1:]:
+            fe = s.f_ext[s.presc == 0]
+            tot += float(np.dot(fe, fe))
+        return math.sqrt(tot) or 1.0
+
+    # ------------------------------------------------------------------ solve
+    def solve(
+        self,
+        load_factor: float = 1.0,
+        displacement: Mapping[str, Sequence[float | None]] | None = None,
+    ) -> NewtonResult:
+        """Equilibrium under ``f_dead + load_factor · f_live`` (and the prescribed
+        displacements), from the committed state; committed if it converges, else the
+        committed state is restored.
+
+        Args:
+            load_factor: factor on the live loads.
+            displacement: ``{prescription name: (ux, uy)}`` [m]: total displacements of
+                the prescribed dofs of that prescription (``None``: leave as it is).
+        """
+        m = self.model
+        if displacement:
+            self.prescribe(displacement)
+        self._load_factor = float(load_factor)
+        m.external_force(load_factor, out=self.f_ext)
+        self._gather(self.x.array)
+        self._forces()
+        self._ref = self._reference()
+        self._history = []
+        self.snes.solve(None, self.x)
+        reason = self.snes.getConvergedReason()
+        its = self.snes.getIterationNumber()
+        converged = reason > 0
+        xa = self.x.getArray(readonly=True)
+        if not np.array_equal(xa, self._x_at_forces):
+            self._scatter(xa)
+            self._forces()
+            self._x_at_forces[:] = xa
+        fl = np.zeros(self.n_local)
+        self._residual_into(fl)
+        rn = math.sqrt(self.comm.allreduce(float(np.dot(fl, fl))))
+        if converged:
+            self.commit()
+            self.load_factor = float(load_factor)
+        else:
+            self.restore()
+        res = NewtonResult(float(load_factor), converged, int(its), rn, self._ref,
+                           _reason_name(reason), tuple(self._history))
+        self.results.append(res)
+        if self.comm.rank == 0:
+            log.info("Newton: load factor %.6g %s in %d iterations (|r|/|f| = %.2e, %s)",
+                     load_factor, "converged" if converged else "NOT converged", its,
+                     res.relative_residual, res.reason)
+        return res
+
+    def commit(self) -> None:
+        """Accept the current state: displacements, the blocks' material state and every
+        interaction's history."""
+        for s in self.sets:
+            s.uc[:] = s.u
+        self.model.commit_state()
+        for c in self.interactions:
+            c.commit()
+
+    def restore(self) -> None:
+        """Back to the committed state (the displacements of every set; the interactions'
+        trial states), forces evaluated there (collective)."""
+        for s in self.sets:
+            s.u[:] = s.uc
+        for c in self.interactions:
+            c.restore()
+        self._forces()
+        self._gather(self._x_at_forces)
+
+    def prescribe(self, displacement: Mapping[str, Sequence[float | None]]) -> None:
+        """Set prescribed dofs to total displacements [m] (see :meth:`solve`)."""
+        by_name = {p.name: p for p in self.model.prescriptions}
+        u = self.model.u.x.array
+        for name, val in displacement.items():
+            if len(val) != 2:
+                raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
+            owner = next((s for s in self.sets[1:] if name in s.prescriptions), None)
+            if owner is not None:
+                dofs = owner.prescriptions[name]
+                for comp in (0, 1):
+                    if val[comp] is not None:
+                        owner.u[dofs[comp]] = float(val[comp])
+                continue
+            if name not in by_name:
+                names = sorted([*by_name, *(n for s in self.sets for n in s.prescriptions)])
+                raise ValueError(f"no prescription named {name!r}; have {names}")
+            p = by_name[name]
+            for comp in (0, 1):
+                if val[comp] is not None:
+                    u[p.dofs[p.components == comp]] = float(val[comp])
+
+    def reactions(self) -> dict[str, np.ndarray]:
+        """Reaction (Rx, Ry) [N] of each prescription at the current state: the force
+        the support applies, f_int − f_interactions − f_ext at its dofs (collective)."""
+        m = self.model
+        self._forces()
+        r_b = m.f_int - self.f_b - self.f_ext
+        out = {}
+        for p in m.prescriptions:
+            r = np.zeros(2)
+            np.add.at(r, p.components, r_b[p.dofs])
+            out[p.name] = m.comm.allreduce(r)
+        for s in self.sets[1:]:
+            for name, dofs in s.prescriptions.items():
+                out[name] = -s.f[dofs] - s.f_ext[dofs]
+        return out
+
+    # ------------------------------------------------------------------ load stepping
+    def advance(
+        self,
+        load_factor: float | None = None,
+        displacement: Mapping[str, Sequence[float | None]] | None = None,
+        *,
+        steps: int = 1,
+        min_fraction: float = 1.0 / 256.0,
+        grow: float = 1.5,
+        easy_iterations: int = 5,
+        callback: Callable[[NewtonResult], None] | None = None,
+    ) -> tuple[RunStatus, list[NewtonResult]]:
+        """Go from the committed state to a target load factor and/or prescribed
+        displacements along a straight path, in ``steps`` increments at first: an
+        increment that fails is undone and halved, one that converges in at most
+        ``easy_iterations`` lets the next grow ``grow`` times (never past the target). A
+        failure at an increment below ``min_fraction`` of the path stops the run.
+
+        Returns:
+            ``(status, results)``: *load reached* if the target was reached, else *not
+            converged* at the path fraction it failed at (``at``: the load factor, or
+            the fraction of the displacement path when only displacements move);
+            ``load`` and ``peak`` are the committed load factor.
+        """
+        if steps < 1:
+            raise ValueError(f"steps must be >= 1, got {steps}")
+        lam0 = self.load_factor
+        lam1 = lam0 if load_factor is None else float(load_factor)
+        start: dict[str, tuple] = {}
+        for name, val in (displacement or {}).items():
+            start[name] = tuple(None if v is None else self._prescribed_value(name, c)
+                                for c, v in enumerate(val))
+        results: list[NewtonResult] = []
+        t, dt = 0.0, 1.0 / steps
+        while t < 1.0 - 1e-12:
+            tn = min(1.0, t + dt)
+            disp = {name: tuple(None if v is None else a + tn * (float(v) - a)
+                                for v, a in zip(val, start[name], strict=True))
+                    for name, val in (displacement or {}).items()}
+            res = self.solve(lam0 + tn * (lam1 - lam0), displacement=disp or None)
+            results.append(res)
+            if callback is not None:
+                callback(res)
+            if res.converged:
+                t = tn
+                if res.iterations <= easy_iterations:
+                    dt *= grow
+                continue
+            # (the failed solve went back to the committed state, prescribed values too)
+            if dt <= min_fraction * (1 + 1e-12):
+                lam = self.load_factor
+                at = lam0 + tn * (lam1 - lam0) if lam1 != lam0 else tn
+                return (RunStatus(Status.NOT_CONVERGED, lam, lam, at,
+                                  f"Newton did not converge ({res.reason}) at {tn:.4g} of the "
+                                  "path, after cut-backs"), results)
+            dt = max(0.5 * dt, min_fraction)
+        lam = self.load_factor
+        return RunStatus(Status.LOAD_REACHED, lam, lam, None, "target reached"), results
+
+    def _prescribed_value(self, name: str, comp: int) -> float:
+        """The current value [m] of component ``comp`` of prescription ``name`` (the
+        mean over its dofs; collective)."""
+        for s in self.sets[1:]:
+            if name in s.prescriptions:
+                return float(s.u[s.prescriptions[name][comp]])
+        p = next((p for p in self.model.prescriptions if p.name == name), None)
+        if p is None:
+            raise ValueError(f"no prescription named {name!r}")
+        vals = self.model.u.x.array[p.dofs[p.components == comp]]
+        tot = [sum(x) for x in zip(*self.comm.allgather((float(vals.sum()), vals.size)),
+                                   strict=True)]
+        return tot[0] / tot[1] if tot[1] else 0.0
+
+    def load_to_collapse(
+        self,
+        increment: float,
+        *,
+        start: float = 0.0,
+        max_load: float = math.inf,
+        min_increment: float | None = None,
+        grow: float = 1.5,
+        easy_iterations: int = 5,
+        max_increment: float | None = None,
+        mechanism_ratio: float = 1e-2,
+        monitor: Callable[[], float] | None = None,
+        callback: Callable[[NewtonResult], None] | None = None,
+    ) -> StaticRun:
+        """Load control: raise the live-load factor until no equilibrium is found.
+
+        From the equilibrium at ``start`` the factor grows by ``increment``; an increment
+        that converges in at most ``easy_iterations`` makes the next one ``grow`` times
+        larger (up to ``max_increment``, default 4 × ``increment``); one that fails is
+        undone and halved, down to ``min_increment`` (default ``increment``/64).
+
+        Status: *load reached* when ``max_load`` is carried. Otherwise the run stops
+        without equilibrium at the smallest increment; it is a *mechanism* if the
+        structure had lost its stiffness there — the current stiffness parameter
+        (Bergan et al. 1978: the incremental stiffness Δλ/|Δu| of the last converged
+        increment over that of the first) below ``mechanism_ratio`` — and *not
+        converged* otherwise (the last load a lower bound). ``monitor()`` gives the
+        displacement measure [m] of the stiffness (default: the norm of u).
+
+        Returns:
+            :class:`StaticRun`.
+        """
+        if not increment > 0:
+            raise ValueError(f"increment must be > 0, got {increment}")
+        dmin = increment / 64.0 if min_increment is None else float(min_increment)
+        dmax = 4.0 * increment if max_increment is None else float(max_increment)
+        if not 0 < dmin <= increment <= dmax:
+            raise ValueError("need 0 < min_increment <= increment <= max_increment")
+
+        def measure() -> float:
+            if monitor is not None:
+                return float(monitor())
+            u = self.sets[0].u
+            return math.sqrt(self.comm.allreduce(float(np.dot(u, u))))
+
+        run = StaticRun(RunStatus(Status.NOT_CONVERGED, start, start))
+        level, step = float(start), float(increment)
+        d_prev = measure()
+        k0 = None  # incremental stiffness of the first increment
+        k_last = None
+        run.load_factors.append(level)
+        run.iterations.append(0)
+        while level < max_load:
+            trial = min(level + step, max_load)
+            res = self.solve(trial)
+            run.results.append(res)
+            if callback is not None:
+                callback(res)
+            if res.converged:
+                d = measure()
+                dd = abs(d - d_prev)
+                k = (trial - level) / dd if dd > 0 else math.inf
+                if k0 is None and math.isfinite(k):
+                    k0 = k
+                k_last = k
+                level, d_prev = trial, d
+                run.load_factors.append(level)
+                run.iterations.append(res.iterations)
+                if res.iterations <= easy_iterations:
+                    step = min(step * grow, dmax)
+                continue
+            if step <= dmin * (1 + 1e-12):
+                sp = (k_last / k0) if (k0 and k_last is not None) else math.nan
+                detail = (f"Newton did not converge at {trial:.6g} ({res.reason}); current "
+                          f"stiffness parameter {sp:.3g}")
+                st = Status.MECHANISM if sp < mechanism_ratio else Status.NOT_CONVERGED
+                run.status = RunStatus(st, level, max(run.load_factors), trial, detail)
+                return run
+            step = max(0.5 * step, dmin)
+        run.status = RunStatus(Status.LOAD_REACHED, level, max(run.load_factors), None,
+                               f"carried {level:.6g}")
+        return run
+
+    # ------------------------------------------------------------------ checks
+    def check_tangent(self, h: float | None = None, columns: Sequence[int] | None = None
+                      ) -> float:
+        """Largest relative difference between the assembled tangent and central finite
+        differences of the residual, over the given global columns (default: all; for
+        small models — each column costs two residual evaluations; collective).
+
+        The step ``h`` defaults to 1e-9 of the largest reference coordinate span."""
+        self._gather(self.x.array)
+        xa0 = self.x.array.copy()
+        self._scatter(xa0)
+        self._forces()
+        self.assemble_tangent()
+        if h is None:
+            span = float(np.ptp(self.model.blocks.x, axis=0).max())
+            h = 1e-9 * span
+        cols = range(self.n_global) if columns is None else columns
+        rp = np.zeros(self.n_local)
+        rm = np.zeros(self.n_local)
+        num = 0.0
+        den = 0.0
+        presc = set(self._presc_global.tolist())
+        col_vec = self.J.createVecLeft()
+        for j in cols:
+            for sign, out in ((1.0, rp), (-1.0, rm)):
+                xa = xa0.copy()
+                if self.start <= j < self.start + self.n_local:
+                    xa[j - self.start] += sign * h
+                self._scatter(xa)
+                self._forces()
+                self._residual_into(out)
+            fd = (rp - rm) / (2 * h)
+            self.J.getColumnVector(j, col_vec)
+            kj = col_vec.getArray(readonly=True).copy()
+            is_presc = self.comm.allreduce(int(j in presc), op=MPI.MAX)
+            if is_presc:
+                continue
+            own_presc = np.array([g in presc for g in range(self.start,
+                                                          self.start + self.n_local)])
+            kj[own_presc] = 0.0
+            fd[own_presc] = 0.0
+            num = max(num, self.comm.allreduce(float(np.max(np.abs(kj - fd), initial=0.0)),
+                                               op=MPI.MAX))
+            den = max(den, self.comm.allreduce(float(np.max(np.abs(kj), initial=0.0)),
+                                               op=MPI.MAX))
+        self._scatter(xa0)
+        self._forces()
+        self._x_at_forces[:] = xa0
+        return num / den if den > 0 else num
+
+
+def _reason_name(reason: int) -> str:
+    for name in dir(PETSc.SNES.ConvergedReason):
+        if not name.startswith("_") and getattr(PETSc.SNES.ConvergedReason, name) == reason:
+            return name
+    return str(reason)
