@@ -320,9 +320,10 @@ class StaticSolver:
         r, c, v = T.coo()
         r = r.astype(PETSc.IntType, copy=False)
         c = c.astype(PETSc.IntType, copy=False)
-        if (self._pattern is None or self._pattern[0].size != r.size
-                or not np.array_equal(self._pattern[0], r)
-                or not np.array_equal(self._pattern[1], c)):
+        changed = (self._pattern is None or self._pattern[0].size != r.size
+                   or not np.array_equal(self._pattern[0], r)
+                   or not np.array_equal(self._pattern[1], c))
+        if self.comm.allreduce(changed, op=MPI.LOR):  # collective: every rank or none
             self.J.setPreallocationCOO(r, c)
             self.J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
             self._pattern = (r.copy(), c.copy())
