@@ -26,6 +26,29 @@ accumulated plastic slip [m], ``NS_WP`` plastic transverse displacement [m].
 Bond-point output columns (``out``): ``NO_SLIP`` [m], ``NO_TAU`` bond stress [Pa], ``NO_W``
 transverse relative displacement [m], ``NO_Q`` transverse force [N], ``NO_PLATE`` plate
 force [N].
+
+Consistent tangent (static Newton solver): a numerical algorithmic tangent (Miehe 1996,
+"Numerical computation of algorithmic (consistent) tangent moduli in large-strain
+computational inelasticity", CMAME 134). :func:`bar_element` and :func:`bond_point` are
+the one kernel of a bar element's and of a bond point's forces; :func:`bar_forces` and
+:func:`bond_forces` sum them, :func:`bar_tangent` and :func:`bond_tangent` differentiate
+them by central differences in each of the item's dofs (a bar: its 2 nodes; a bond
+point: both nodes of its bar element, on which the bar direction depends, and its 3 host
+nodes), every evaluation returning from the committed state as the forces do, into
+scratch rows (the trial state is left as it is). Force and tangent thus come from the
+same discrete laws — steel return with hardening and rupture, bond envelope with plastic
+slip, dowel, plates, the turning bar — and cannot drift apart.
+
+The step is h = FD_STEP · L0 of the item's bar element (FD_STEP = 1e-8: h = 2e-10 m on a
+2 cm element; FD_STEP · |u| for a dof displaced by more than L0, so that u ± h never rounds
+back to u); the perturbation actually applied, (u + h) − (u − h) in floating point, is
+the divisor. Within one branch the laws are linear in the slip and strain, so the error
+is the truncation of the geometry, (h/L0)², nil, and round-off: strains and relative
+displacements are formed from displacements alone (no X + u cancellation), so it is
+relative ~ε·|u|/h ~1e-9. Measured against central differences of the assembled forces
+(tests/test_tangent_joints_anchors.py): ~1e-9 of the largest entry, elastic, yielding,
+on the bond plateau and softening branch. An item closer than h to a kink (yield, the
+envelope's corners, a plate touching) gets a blend of the two branches' tangents there.
 """
 
 import math
@@ -43,6 +66,10 @@ NS_SP, NS_KAPPA, NS_WP = range(3)
 N_NS = 3
 NO_SLIP, NO_TAU, NO_W, NO_Q, NO_PLATE = range(5)
 N_NO = 5
+
+#: finite-difference step of the tangents, as a fraction of the bar element's length L0
+#: (see the module doc)
+FD_STEP = 1e-8
 
 
 @njit(cache=True)
@@ -115,44 +142,108 @@ def steel_return(eps, E, fy, H, epsu, epsp, alpha, rupt, res):
 
 
 @njit(cache=True)
+def bar_element(xa, ua, conn, L0, ep, jacking, es, e, et_e, res):
+    """Axial force of bar element ``e``: the single source of its forces and tangent.
+
+    Writes the trial state into ``et_e`` (N_ES,) (``res``: (4,) scratch). Returns
+    (axial force N [N], strain, fx, fy, has_length): the force (fx, fy) [N] on its first
+    node, the opposite one on its second (both 0 for an element of zero length).
+    """
+    a = conn[e, 0]
+    b = conn[e, 1]
+    X0 = xa[b, 0] - xa[a, 0]
+    Y0 = xa[b, 1] - xa[a, 1]
+    du = ua[2 * b] - ua[2 * a]
+    dv = ua[2 * b + 1] - ua[2 * a + 1]
+    dx = X0 + du
+    dy = Y0 + dv
+    ell = math.sqrt(dx * dx + dy * dy)
+    # ℓ − L0 = (ℓ² − L0²)/(ℓ + L0), free of the cancellation of ℓ − L0 for a stiff bar
+    eps = (2.0 * (X0 * du + Y0 * dv) + du * du + dv * dv) / ((ell + L0[e]) * L0[e])
+    if jacking[e]:
+        n = ep[e, EP_JACK]
+        et_e[ES_EPSP] = es[e, ES_EPSP]
+        et_e[ES_ALPHA] = es[e, ES_ALPHA]
+        et_e[ES_RUPT] = es[e, ES_RUPT]
+    else:
+        steel_return(eps, ep[e, EP_E], ep[e, EP_FY], ep[e, EP_H], ep[e, EP_EPSU],
+                     es[e, ES_EPSP], es[e, ES_ALPHA], es[e, ES_RUPT], res)
+        n = res[0] * ep[e, EP_AREA]
+        et_e[ES_EPSP] = res[1]
+        et_e[ES_ALPHA] = res[2]
+        et_e[ES_RUPT] = res[3]
+    fx = 0.0
+    fy = 0.0
+    if ell > 0.0:
+        fx = n * dx / ell
+        fy = n * dy / ell
+    return n, eps, fx, fy, ell > 0.0
+
+
+@njit(cache=True)
 def bar_forces(xa, ua, conn, L0, ep, jacking, es, et, axial, strain, fa):
     """Axial forces of the bar elements at the current node positions into ``fa`` (+=);
     trial element state into ``et``; row axial force [N] and strain into ``axial``,
     ``strain``. A jacking element carries its jacking force whatever its length."""
     res = np.empty(4)
     for e in range(conn.shape[0]):
-        a = conn[e, 0]
-        b = conn[e, 1]
-        X0 = xa[b, 0] - xa[a, 0]
-        Y0 = xa[b, 1] - xa[a, 1]
-        du = ua[2 * b] - ua[2 * a]
-        dv = ua[2 * b + 1] - ua[2 * a + 1]
-        dx = X0 + du
-        dy = Y0 + dv
-        ell = math.sqrt(dx * dx + dy * dy)
-        # ℓ − L0 = (ℓ² − L0²)/(ℓ + L0), free of the cancellation of ℓ − L0 for a stiff bar
-        eps = (2.0 * (X0 * du + Y0 * dv) + du * du + dv * dv) / ((ell + L0[e]) * L0[e])
+        n, eps, fx, fy, ok = bar_element(xa, ua, conn, L0, ep, jacking, es, e, et[e], res)
         strain[e] = eps
-        if jacking[e]:
-            n = ep[e, EP_JACK]
-            et[e, ES_EPSP] = es[e, ES_EPSP]
-            et[e, ES_ALPHA] = es[e, ES_ALPHA]
-            et[e, ES_RUPT] = es[e, ES_RUPT]
-        else:
-            steel_return(eps, ep[e, EP_E], ep[e, EP_FY], ep[e, EP_H], ep[e, EP_EPSU],
-                         es[e, ES_EPSP], es[e, ES_ALPHA], es[e, ES_RUPT], res)
-            n = res[0] * ep[e, EP_AREA]
-            et[e, ES_EPSP] = res[1]
-            et[e, ES_ALPHA] = res[2]
-            et[e, ES_RUPT] = res[3]
         axial[e] = n
-        if ell > 0.0:
-            fx = n * dx / ell
-            fy = n * dy / ell
+        if ok:
+            a = conn[e, 0]
+            b = conn[e, 1]
             fa[2 * a] += fx
             fa[2 * a + 1] += fy
             fa[2 * b] -= fx
             fa[2 * b + 1] -= fy
+
+
+@njit(cache=True)
+def bar_tangent(xa, ua, conn, L0, ep, jacking, es, rel_step, rows, cols, vals):
+    """Consistent tangent −∂f/∂u_a [N/m] of the bar elements, by central differences of
+    :func:`bar_element` (the force kernel itself) in each of an element's 4 dofs; each
+    evaluation returns from the committed state ``es`` into a scratch row (the trial
+    state of :func:`bar_forces` is left as it is). Step: ``rel_step`` × L0 of the element
+    (× |u| if larger).
+
+    Returns the number of COO entries written into ``rows``, ``cols`` (anchor dof
+    numbers) and ``vals`` (16 per element).
+    """
+    uw = ua.copy()
+    res = np.empty(4)
+    scratch = np.empty(N_ES)
+    dofs = np.empty(4, dtype=np.int64)
+    nent = 0
+    for e in range(conn.shape[0]):
+        dofs[0] = 2 * conn[e, 0]
+        dofs[1] = dofs[0] + 1
+        dofs[2] = 2 * conn[e, 1]
+        dofs[3] = dofs[2] + 1
+        h = rel_step * L0[e]
+        for j in range(4):
+            k = dofs[j]
+            u0 = uw[k]
+            hk = max(h, rel_step * abs(u0))  # never lost in the round-off of u0 ± h
+            up = u0 + hk
+            um = u0 - hk
+            uw[k] = up
+            _, _, fxp, fyp, _ = bar_element(xa, uw, conn, L0, ep, jacking, es, e, scratch, res)
+            uw[k] = um
+            _, _, fxm, fym, _ = bar_element(xa, uw, conn, L0, ep, jacking, es, e, scratch, res)
+            uw[k] = u0
+            den = up - um
+            gx = -(fxp - fxm) / den
+            gy = -(fyp - fym) / den
+            for i in range(4):
+                rows[nent + i] = dofs[i]
+                cols[nent + i] = k
+            vals[nent] = gx
+            vals[nent + 1] = gy
+            vals[nent + 2] = -gx
+            vals[nent + 3] = -gy
+            nent += 4
+    return nent
 
 
 @njit(cache=True)
@@ -187,6 +278,63 @@ def relative_displacement(ua, ub, hnode, hosts, hw, h, d):
 
 
 @njit(cache=True)
+def bond_point(xa, ua, ub, conn, hnode, helem, hosts, hw, npr, laws_s, laws_t, laws_n,
+               laws_k0, dref, ns, h, nt_h, out_h, t, d, res):
+    """Bond, dowel and plate force of bond point ``h`` (with a local host): the single
+    source of its forces and tangent.
+
+    Writes its trial state into ``nt_h`` (N_NS,) and its outputs into ``out_h`` (N_NO,)
+    (``t``, ``d``: (2,), ``res``: (3,) scratch). Returns the force (gx, gy) [N] on its bar
+    node; its host triangle's nodes take −hw[h, k] (gx, gy).
+    """
+    element_tangent(xa, ua, conn, helem[h], t)
+    relative_displacement(ua, ub, hnode, hosts, hw, h, d)
+    nx = -t[1]
+    ny = t[0]
+    # bond along the bar
+    s = (d[0] - dref[h, 0]) * t[0] + (d[1] - dref[h, 1]) * t[1]
+    tau = 0.0
+    if npr[h, NP_BONDED] > 0.5 and npr[h, NP_BOND] > 0.0:
+        law = int(npr[h, NP_LAW])
+        bond_return(laws_s[law], laws_t[law], laws_n[law], laws_k0[law], s,
+                    ns[h, NS_SP], ns[h, NS_KAPPA], res)
+        tau = res[0]
+        nt_h[NS_SP] = res[1]
+        nt_h[NS_KAPPA] = res[2]
+    else:
+        nt_h[NS_SP] = ns[h, NS_SP]
+        nt_h[NS_KAPPA] = ns[h, NS_KAPPA]
+    fs = -npr[h, NP_BOND] * tau  # along t, on the bar node
+    # transverse tie (elastic, or elastic-perfectly plastic dowel)
+    w = d[0] * nx + d[1] * ny
+    q = 0.0
+    wp = ns[h, NS_WP]
+    kt = npr[h, NP_KT]
+    if kt > 0.0:
+        q = kt * (w - wp)
+        qy = npr[h, NP_QY]
+        if abs(q) > qy:
+            q = qy if q > 0.0 else -qy
+            wp = w - q / kt
+    nt_h[NS_WP] = wp
+    # end plate: bears when the bar pulls its end into the block
+    fp = 0.0
+    side = npr[h, NP_PLATE]
+    if side != 0.0:
+        sp = d[0] * t[0] + d[1] * t[1]
+        if side * sp > 0.0:
+            fp = npr[h, NP_KP] * sp
+    gx = (fs - fp) * t[0] - q * nx
+    gy = (fs - fp) * t[1] - q * ny
+    out_h[NO_SLIP] = s
+    out_h[NO_TAU] = tau
+    out_h[NO_W] = w
+    out_h[NO_Q] = q
+    out_h[NO_PLATE] = fp
+    return gx, gy
+
+
+@njit(cache=True)
 def bond_forces(xa, ua, ub, conn, hnode, helem, hosts, hw, npr, laws_s, laws_t, laws_n,
                 laws_k0, dref, ns, nt, out, fa, fb):
     """Bond, dowel and end-plate forces of the bond points with a host on this rank.
@@ -207,45 +355,8 @@ def bond_forces(xa, ua, ub, conn, hnode, helem, hosts, hw, npr, laws_s, laws_t, 
             for c in range(out.shape[1]):
                 out[h, c] = 0.0
             continue
-        element_tangent(xa, ua, conn, helem[h], t)
-        relative_displacement(ua, ub, hnode, hosts, hw, h, d)
-        nx = -t[1]
-        ny = t[0]
-        # bond along the bar
-        s = (d[0] - dref[h, 0]) * t[0] + (d[1] - dref[h, 1]) * t[1]
-        tau = 0.0
-        if npr[h, NP_BONDED] > 0.5 and npr[h, NP_BOND] > 0.0:
-            law = int(npr[h, NP_LAW])
-            bond_return(laws_s[law], laws_t[law], laws_n[law], laws_k0[law], s,
-                        ns[h, NS_SP], ns[h, NS_KAPPA], res)
-            tau = res[0]
-            nt[h, NS_SP] = res[1]
-            nt[h, NS_KAPPA] = res[2]
-        else:
-            nt[h, NS_SP] = ns[h, NS_SP]
-            nt[h, NS_KAPPA] = ns[h, NS_KAPPA]
-        fs = -npr[h, NP_BOND] * tau  # along t, on the bar node
-        # transverse tie (elastic, or elastic-perfectly plastic dowel)
-        w = d[0] * nx + d[1] * ny
-        q = 0.0
-        wp = ns[h, NS_WP]
-        kt = npr[h, NP_KT]
-        if kt > 0.0:
-            q = kt * (w - wp)
-            qy = npr[h, NP_QY]
-            if abs(q) > qy:
-                q = qy if q > 0.0 else -qy
-                wp = w - q / kt
-        nt[h, NS_WP] = wp
-        # end plate: bears when the bar pulls its end into the block
-        fp = 0.0
-        side = npr[h, NP_PLATE]
-        if side != 0.0:
-            sp = d[0] * t[0] + d[1] * t[1]
-            if side * sp > 0.0:
-                fp = npr[h, NP_KP] * sp
-        gx = (fs - fp) * t[0] - q * nx
-        gy = (fs - fp) * t[1] - q * ny
+        gx, gy = bond_point(xa, ua, ub, conn, hnode, helem, hosts, hw, npr, laws_s, laws_t,
+                            laws_n, laws_k0, dref, ns, h, nt[h], out[h], t, d, res)
         i = hnode[h]
         fa[2 * i] += gx
         fa[2 * i + 1] += gy
@@ -253,11 +364,81 @@ def bond_forces(xa, ua, ub, conn, hnode, helem, hosts, hw, npr, laws_s, laws_t, 
             j = hosts[h, k]
             fb[2 * j] -= hw[h, k] * gx
             fb[2 * j + 1] -= hw[h, k] * gy
-        out[h, NO_SLIP] = s
-        out[h, NO_TAU] = tau
-        out[h, NO_W] = w
-        out[h, NO_Q] = q
-        out[h, NO_PLATE] = fp
+
+
+@njit(cache=True)
+def bond_tangent(xa, ua, ub, conn, L0, hnode, helem, hosts, hw, npr, laws_s, laws_t,
+                 laws_n, laws_k0, dref, ns, rel_step, rows, cols, vals):
+    """Consistent tangent −∂f/∂u [N/m] of the bond points with a local host, by central
+    differences of :func:`bond_point` (the force kernel itself) in each of a point's 10
+    dofs: both nodes of its bar element (the bar direction t depends on them, the bar
+    node is one of them) and its 3 host nodes. Each evaluation returns from the
+    committed state ``ns`` into scratch rows (the trial state and outputs of
+    :func:`bond_forces` are left as they are). Step: ``rel_step`` × L0 of the element
+    (× |u| if larger).
+
+    Dof numbers of the output: anchor dof k → k, block dof j → ``ua.size + j``.
+    Returns the number of COO entries written into ``rows``, ``cols`` and ``vals``
+    (80 per point: 8 rows, the bar node's and the hosts', × 10 columns).
+    """
+    uw = ua.copy()
+    bw = ub.copy()
+    na = ua.size
+    t = np.empty(2)
+    d = np.empty(2)
+    res = np.empty(3)
+    nt_s = np.empty(N_NS)
+    out_s = np.empty(N_NO)
+    dofs = np.empty(10, dtype=np.int64)  # extended numbering: anchors, then blocks
+    fl = np.empty(8)  # force differences on the bar node and the host nodes
+    nent = 0
+    for h in range(hnode.size):
+        if hosts[h, 0] < 0:
+            continue
+        e = helem[h]
+        dofs[0] = 2 * conn[e, 0]
+        dofs[2] = 2 * conn[e, 1]
+        dofs[4] = na + 2 * hosts[h, 0]
+        dofs[6] = na + 2 * hosts[h, 1]
+        dofs[8] = na + 2 * hosts[h, 2]
+        for j in range(0, 10, 2):
+            dofs[j + 1] = dofs[j] + 1
+        i = hnode[h]
+        step = rel_step * L0[e]
+        for j in range(10):
+            k = dofs[j]
+            arr = uw if k < na else bw
+            kk = k if k < na else k - na
+            u0 = arr[kk]
+            hk = max(step, rel_step * abs(u0))  # never lost in the round-off of u0 ± h
+            up = u0 + hk
+            um = u0 - hk
+            arr[kk] = up
+            gxp, gyp = bond_point(xa, uw, bw, conn, hnode, helem, hosts, hw, npr, laws_s,
+                                  laws_t, laws_n, laws_k0, dref, ns, h, nt_s, out_s, t, d,
+                                  res)
+            arr[kk] = um
+            gxm, gym = bond_point(xa, uw, bw, conn, hnode, helem, hosts, hw, npr, laws_s,
+                                  laws_t, laws_n, laws_k0, dref, ns, h, nt_s, out_s, t, d,
+                                  res)
+            arr[kk] = u0
+            den = up - um
+            gx = -(gxp - gxm) / den
+            gy = -(gyp - gym) / den
+            fl[0] = gx
+            fl[1] = gy
+            for m in range(3):
+                fl[2 + 2 * m] = -hw[h, m] * gx
+                fl[3 + 2 * m] = -hw[h, m] * gy
+            rows[nent] = 2 * i
+            rows[nent + 1] = 2 * i + 1
+            for m in range(6):
+                rows[nent + 2 + m] = dofs[4 + m]
+            for m in range(8):
+                cols[nent + m] = k
+                vals[nent + m] = fl[m]
+            nent += 8
+    return nent
 
 
 @njit(cache=True)
@@ -295,3 +476,9 @@ def precompile() -> None:
                 np.ones(1, dtype=np.int64), np.ones(1), np.zeros((2, 2)), ns, ns.copy(),
                 np.zeros((2, N_NO)), np.zeros(4), np.zeros(8))
     relative_displacements(ua, ub, hn, hosts, hw, np.zeros((2, 2)))
+    bar_tangent(xa, ua, conn, np.full(1, 0.5), ep, np.zeros(1, np.int8), es, FD_STEP,
+                np.zeros(16, np.int64), np.zeros(16, np.int64), np.zeros(16))
+    bond_tangent(xa, ua, ub, conn, np.full(1, 0.5), hn, he, hosts, hw, npr, np.ones((1, 1)),
+                 np.ones((1, 1)), np.ones(1, dtype=np.int64), np.ones(1), np.zeros((2, 2)),
+                 ns, FD_STEP, np.zeros(160, np.int64), np.zeros(160, np.int64),
+                 np.zeros(160))

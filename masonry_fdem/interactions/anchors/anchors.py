@@ -37,6 +37,11 @@ host block computes its bond, dowel and plate forces; one ``Allreduce`` per step
 anchor-node forces; the bar forces and the anchor-node update are then computed
 identically on every rank.
 
+**Consistent tangent** (``add_tangent``, static Newton solver): per bond point and per bar
+element, central differences of the item's own force kernel in its dofs, at the committed
+history (a numerical algorithmic tangent, Miehe 1996; step and accuracy in
+:mod:`._kernels`). Bond points are added by their host's rank, bar elements by rank 0.
+
 Units: SI (m, N, Pa, kg).
 """
 
@@ -52,7 +57,7 @@ import numpy as np
 from masonry_fdem.geometry.locate import locate_in_block, locate_points
 from masonry_fdem.interactions.anchors import _kernels as AK
 from masonry_fdem.interactions.anchors.laws import Anchor, BondLaw, DowelLaw, SteelLaw
-from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction, State
+from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction, State, Tangent
 
 __all__ = [
     "SteelLaw",
@@ -380,6 +385,35 @@ class Anchors(Interaction):
         fa += self._fbond
         AK.bar_forces(self.x, ua, self.conn, self.L0, self.ep, self.jacking, self.es,
                       self.et, self.axial, self.strain, fa)
+
+    def add_tangent(self, K: Tangent, state: State) -> None:
+        """The consistent tangent −∂f/∂u [N/m] of the bond points with a local host (rows
+        of their bar node and host nodes; columns of their bar element's nodes and host
+        nodes) and, on rank 0 alone, of the bar elements (computed alike on every rank)
+        into ``K``, at the positions of the last :meth:`add_forces`. Central differences
+        of the force kernels, see :func:`._kernels.bond_tangent`, :func:`._kernels.bar_tangent`.
+        """
+        ua, ub = state.u["anchors"], state.u[BLOCKS]
+        nb = int(np.count_nonzero(self.local))
+        rows = np.empty(80 * nb, dtype=np.int64)
+        cols = np.empty(80 * nb, dtype=np.int64)
+        vals = np.empty(80 * nb)
+        nent = AK.bond_tangent(self.x, ua, ub, self.conn, self.L0, self.hnode, self.helem,
+                               self.hosts, self.hw, self.npr, self.laws_s, self.laws_t,
+                               self.laws_n, self.laws_k0, self.dref, self.ns, AK.FD_STEP,
+                               rows, cols, vals)
+        if nent:
+            glob = np.r_[K.index["anchors"], K.index[BLOCKS][:ub.size]]
+            K.add(glob[rows[:nent]], glob[cols[:nent]], vals[:nent])
+        if K.rank == 0:
+            ne = self.n_elements
+            rows = np.empty(16 * ne, dtype=np.int64)
+            cols = np.empty(16 * ne, dtype=np.int64)
+            vals = np.empty(16 * ne)
+            nent = AK.bar_tangent(self.x, ua, self.conn, self.L0, self.ep, self.jacking,
+                                  self.es, AK.FD_STEP, rows, cols, vals)
+            ia = K.index["anchors"]
+            K.add(ia[rows[:nent]], ia[cols[:nent]], vals[:nent])
 
     def commit(self) -> None:
         """Accept the trial bond and steel state."""

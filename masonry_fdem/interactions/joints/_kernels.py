@@ -24,6 +24,31 @@ The return mapping starts from the COMMITTED state and the current total relativ
 displacement (backward Euler), and writes a TRIAL state: explicit runs commit every step,
 dynamic relaxation commits at a converged load step. Surfaces are returned one after the
 other (tension, shear, cap), repeated until all hold (corners).
+
+Consistent tangent (static Newton solver): a numerical algorithmic tangent (Miehe 1996,
+"Numerical computation of algorithmic (consistent) tangent moduli in large-strain
+computational inelasticity", CMAME 134). :func:`point_forces` is the one kernel of an
+integration point's forces; :func:`joint_forces` sums it over the points, and
+:func:`joint_tangent` differentiates it by central differences in each of the point's 8
+dofs (the nodes a0, a1, b0, b1), every evaluation returning from the committed state as
+the forces do. Force and tangent thus come from the same discrete law — return mapping,
+bisections, corner Newton, rotating joint frame — and cannot drift apart; the stiffness
+of a softening branch or of a corner comes out as the return mapping makes it.
+
+The step is h = FD_STEP · L with L the reference length of the point's side-A facet
+(FD_STEP = 1e-8: h ≈ 5e-10 m on a 5 cm facet; FD_STEP · |u| for a dof displaced by more
+than L, so that u ± h never rounds back to u). Within one branch of the law the force is
+smooth, so the error of the central difference is the truncation, of relative size
+(h/ℓ)² with ℓ the shortest length of the law (the softening length G_f/f_t, ~1e-5–1e-4
+m; the facet length for the turning frame), ~1e-9 or less; plus round-off, relative
+~ε·|Δ|/h: the relative displacement is formed from displacements alone (no X + u
+cancellation; the frame's X + u only enters the small geometric terms), and the inner
+bisections stop at 1e-15 of the trial plastic displacement, the corner Newton at 1e-12 of
+the strengths, so this is ~1e-9 too. Measured against central differences of the
+assembled forces (tests/test_tangent_joints_anchors.py), elastic, softening, corner, open
+and sliding states agree to ~1e-10 of the largest entry (both larger and smaller steps by
+a factor of 100 keep 1e-6). A point closer than h to a kink of the law (the elastic
+limit, an unloading) gets a blend of the tangents of the two branches there.
 """
 
 from __future__ import annotations
@@ -48,6 +73,10 @@ BROKEN_R = 1e-2  # softening factor below which a joint counts as broken
 
 # energies returned
 E_ELASTIC, E_DISSIPATED = 0, 1
+
+#: finite-difference step of the tangent, as a fraction of the point's facet length
+#: (see the module doc)
+FD_STEP = 1e-8
 
 
 @njit(cache=True)
@@ -300,6 +329,50 @@ def interface_law(p, dn, ds, s0, s1):
 
 
 @njit(cache=True)
+def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
+    """Forces of one integration point: the single source of forces and tangent.
+
+    Args:
+        X, u: reference coordinates (n, 2) [m] and displacements (2n,) [m].
+        a0, a1, b0, b1: the end nodes of its facets on side A and side B.
+        ga, gb: its position along each facet (0 at the first node).
+        wq: its weight [m²].
+        p: (N_PROPS,) its material properties.
+        s0q, s1q: (N_STATE,) its committed state (read) and trial state (written).
+        fl: (8,) its forces [N] on (a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y) (written).
+    """
+    # joint frame from the current facets (B reversed): t along A, n out of A
+    tx = (X[a1, 0] + u[2 * a1] - X[a0, 0] - u[2 * a0]) + (
+        X[b0, 0] + u[2 * b0] - X[b1, 0] - u[2 * b1])
+    ty = (X[a1, 1] + u[2 * a1 + 1] - X[a0, 1] - u[2 * a0 + 1]) + (
+        X[b0, 1] + u[2 * b0 + 1] - X[b1, 1] - u[2 * b1 + 1])
+    ln = math.sqrt(tx * tx + ty * ty)
+    tx /= ln
+    ty /= ln
+    nx = ty
+    ny = -tx
+    dux = ((1.0 - gb) * u[2 * b0] + gb * u[2 * b1]) - ((1.0 - ga) * u[2 * a0] + ga * u[2 * a1])
+    duy = ((1.0 - gb) * u[2 * b0 + 1] + gb * u[2 * b1 + 1]) - (
+        (1.0 - ga) * u[2 * a0 + 1] + ga * u[2 * a1 + 1])
+    dn = dux * nx + duy * ny
+    ds = dux * tx + duy * ty
+    interface_law(p, dn, ds, s0q, s1q)
+    sn = s1q[S_SN]
+    ts = s1q[S_TS]
+    fx = wq * (sn * nx + ts * tx)
+    fy = wq * (sn * ny + ts * ty)
+    # the traction pulls B back towards A when the joint opens (σ > 0)
+    fl[0] = (1.0 - ga) * fx
+    fl[1] = (1.0 - ga) * fy
+    fl[2] = ga * fx
+    fl[3] = ga * fy
+    fl[4] = -((1.0 - gb) * fx)
+    fl[5] = -((1.0 - gb) * fy)
+    fl[6] = -(gb * fx)
+    fl[7] = -(gb * fy)
+
+
+@njit(cache=True)
 def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, s1, f, energy):
     """Forces of all bonded integration points (trial state from the committed one).
 
@@ -319,6 +392,7 @@ def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, s1, f, en
     """
     e_el = 0.0
     e_dis = 0.0
+    fl = np.empty(8)
     for q in range(ipa.shape[0]):
         if alive[q] == 0:
             e_dis += w[q] * s0[q, S_DISS]
@@ -328,41 +402,85 @@ def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, s1, f, en
         a1 = ipa[q, 1]
         b0 = ipb[q, 0]
         b1 = ipb[q, 1]
-        # joint frame from the current facets (B reversed): t along A, n out of A
-        tx = (X[a1, 0] + u[2 * a1] - X[a0, 0] - u[2 * a0]) + (
-            X[b0, 0] + u[2 * b0] - X[b1, 0] - u[2 * b1])
-        ty = (X[a1, 1] + u[2 * a1 + 1] - X[a0, 1] - u[2 * a0 + 1]) + (
-            X[b0, 1] + u[2 * b0 + 1] - X[b1, 1] - u[2 * b1 + 1])
-        ln = math.sqrt(tx * tx + ty * ty)
-        tx /= ln
-        ty /= ln
-        nx = ty
-        ny = -tx
-        ga = xia[q]
-        gb = xib[q]
-        dux = ((1.0 - gb) * u[2 * b0] + gb * u[2 * b1]) - ((1.0 - ga) * u[2 * a0] + ga * u[2 * a1])
-        duy = ((1.0 - gb) * u[2 * b0 + 1] + gb * u[2 * b1 + 1]) - (
-            (1.0 - ga) * u[2 * a0 + 1] + ga * u[2 * a1 + 1])
-        dn = dux * nx + duy * ny
-        ds = dux * tx + duy * ty
-        interface_law(p, dn, ds, s0[q], s1[q])
+        point_forces(X, u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q], fl)
+        f[2 * a0] += fl[0]
+        f[2 * a0 + 1] += fl[1]
+        f[2 * a1] += fl[2]
+        f[2 * a1 + 1] += fl[3]
+        f[2 * b0] += fl[4]
+        f[2 * b0 + 1] += fl[5]
+        f[2 * b1] += fl[6]
+        f[2 * b1 + 1] += fl[7]
         sn = s1[q, S_SN]
         ts = s1[q, S_TS]
-        fx = w[q] * (sn * nx + ts * tx)
-        fy = w[q] * (sn * ny + ts * ty)
-        # the traction pulls B back towards A when the joint opens (σ > 0)
-        f[2 * a0] += (1.0 - ga) * fx
-        f[2 * a0 + 1] += (1.0 - ga) * fy
-        f[2 * a1] += ga * fx
-        f[2 * a1 + 1] += ga * fy
-        f[2 * b0] -= (1.0 - gb) * fx
-        f[2 * b0 + 1] -= (1.0 - gb) * fy
-        f[2 * b1] -= gb * fx
-        f[2 * b1 + 1] -= gb * fy
         e_el += 0.5 * w[q] * (sn * sn / p[P_KN] + ts * ts / p[P_KS])
         e_dis += w[q] * s1[q, S_DISS]
     energy[E_ELASTIC] = e_el
     energy[E_DISSIPATED] = e_dis
+
+
+@njit(cache=True)
+def joint_tangent(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step, rows,
+                  cols, vals):
+    """Consistent tangent −∂f/∂u [N/m] of the live integration points, by central
+    differences of :func:`point_forces` (the force kernel itself) in each of the point's
+    8 dofs; a numerical algorithmic tangent (Miehe 1996, CMAME 134).
+
+    Each evaluation returns from the committed state ``s0`` (backward Euler), so the
+    perturbed states see the same history as the forces; their trial states go to a
+    scratch row, so the trial state ``s1`` of :func:`joint_forces` is left as it is.
+    The step of a point is ``rel_step`` times the reference length of its side-A facet
+    (or of |u| if larger; see the module doc); the perturbation actually applied,
+    (u + h) − (u − h) in floating point, is the divisor.
+
+    Args:
+        X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0: as :func:`joint_forces`.
+        rel_step: the step as a fraction of the facet length.
+        rows, cols, vals: (64 m,) COO output: dof numbers of ``u`` (2 node + component)
+            and values [N/m].
+
+    Returns:
+        The number of entries written (64 per live point).
+    """
+    uw = u.copy()
+    scratch = np.empty(N_STATE)
+    fp = np.empty(8)
+    fm = np.empty(8)
+    dofs = np.empty(8, dtype=np.int64)
+    nent = 0
+    for q in range(ipa.shape[0]):
+        if alive[q] == 0:
+            continue
+        p = props[ipmat[q]]
+        a0 = ipa[q, 0]
+        a1 = ipa[q, 1]
+        b0 = ipb[q, 0]
+        b1 = ipb[q, 1]
+        dofs[0] = 2 * a0
+        dofs[2] = 2 * a1
+        dofs[4] = 2 * b0
+        dofs[6] = 2 * b1
+        for j in range(0, 8, 2):
+            dofs[j + 1] = dofs[j] + 1
+        h = rel_step * math.sqrt((X[a1, 0] - X[a0, 0]) ** 2 + (X[a1, 1] - X[a0, 1]) ** 2)
+        for j in range(8):
+            k = dofs[j]
+            u0 = uw[k]
+            hk = max(h, rel_step * abs(u0))  # never lost in the round-off of u0 ± h
+            up = u0 + hk
+            um = u0 - hk
+            uw[k] = up
+            point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fp)
+            uw[k] = um
+            point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fm)
+            uw[k] = u0
+            den = up - um
+            for i in range(8):
+                rows[nent] = dofs[i]
+                cols[nent] = k
+                vals[nent] = -(fp[i] - fm[i]) / den
+                nent += 1
+    return nent
 
 
 @njit(cache=True)
@@ -406,6 +524,9 @@ def precompile() -> None:
     alive = np.ones(1, dtype=np.int8)
     joint_forces(X, u, ip, ip[:, ::-1].copy(), half, half, half, np.zeros(1, np.int64),
                  props, alive, s0, s1, np.zeros(8), np.zeros(2))
+    joint_tangent(X, u, ip, ip[:, ::-1].copy(), half, half, half, np.zeros(1, np.int64),
+                  props, alive, s0, FD_STEP, np.zeros(64, np.int64), np.zeros(64, np.int64),
+                  np.zeros(64))
     commit(alive, s0, s1)
     node_spring_bound(ip, ip, half, half, half, np.zeros(1, np.int64), props, alive,
                       np.zeros(4))

@@ -4,7 +4,7 @@ At set-up, boundary facets of different blocks that coincide (collinear, facing 
 overlapping, within a tolerance) are paired into joint *segments*. Each segment carries two
 integration points at the ends of the overlap (Lobatto/nodal integration, which keeps
 interface tractions free of the oscillations Gauss points give), and each point carries the
-composite interface law of Lourenço & Rots (:mod:`._joint_kernels`): tension cut-off with
+composite interface law of Lourenço & Rots (:mod:`._kernels`): tension cut-off with
 exponential softening (G_fI), Coulomb friction with softening cohesion (G_fII) and
 dilatancy, and a compression cap with hardening and softening.
 
@@ -29,6 +29,11 @@ facet pair.
 Parallel: every rank knows every segment; a segment is computed by the rank holding the
 block of its lower facet id, and the nodes of the other facet are exchanged every step.
 
+Consistent tangent (``add_tangent``, static Newton solver): per integration point, central
+differences of the point's own force kernel in its 8 dofs, at the committed history (a
+numerical algorithmic tangent, Miehe 1996; step and accuracy in :mod:`._kernels`). The
+rank computing a point adds its entries, the ghost nodes by their global dof numbers.
+
 Units: SI — stiffnesses in Pa/m, strengths in Pa, fracture energies in N/m (J/m²).
 """
 
@@ -45,7 +50,7 @@ import numpy as np
 
 from masonry_fdem.geometry.blockmesh import unit_name
 from masonry_fdem.interactions.joints import _kernels as JK
-from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
+from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tangent
 
 __all__ = ["JointMaterial", "Joints", "JOINT_STATES"]
 
@@ -390,6 +395,8 @@ class Joints(Interaction):
             raise RuntimeError("a joint node is neither local nor a ghost")
         nn = nloc + ghosts.size
         self.n_local_nodes = nloc
+        # input ids of the extended nodes (local, then ghosts): global dofs of the tangent
+        self.ext_input = np.r_[model.node_input, ghosts].astype(np.int64)
         self.X = np.ascontiguousarray(np.r_[model.X, blocks.x[ghosts]])
         self.u = np.zeros(2 * nn)
         self.f = np.zeros(2 * nn)
@@ -448,6 +455,23 @@ class Joints(Interaction):
         f[:nloc] += self.f[:nloc]
         if self.exchange is not None:
             self.exchange.reverse(self.f[nloc:].reshape(-1, 2), f[:nloc].reshape(-1, 2))
+
+    def add_tangent(self, K: Tangent, state: State) -> None:
+        """The consistent tangent −∂f/∂u [N/m] of the live integration points into ``K``
+        (at the displacement of the last :meth:`add_forces`, with the same committed
+        history). Each point is added by the rank computing it, its side-B columns and
+        rows by the global numbers of the ghost nodes (PETSc sends the rows to their
+        owner). Central differences of the force kernel, see :func:`._kernels.joint_tangent`.
+        """
+        m = self.ipa.shape[0]
+        rows = np.empty(64 * m, dtype=np.int64)
+        cols = np.empty(64 * m, dtype=np.int64)
+        vals = np.empty(64 * m)
+        nent = JK.joint_tangent(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib,
+                                self.w, self.ipmat, self.props, self.alive, self.s0,
+                                JK.FD_STEP, rows, cols, vals)
+        dofs = K.node_dofs(self.ext_input)
+        K.add(dofs[rows[:nent]], dofs[cols[:nent]], vals[:nent])
 
     def commit(self) -> None:
         """Accept the trial state (every explicit step; a converged DR increment).
