@@ -3,11 +3,11 @@ and the dof sets these bring along."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 
 from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction
 
-__all__ = ["as_interactions", "owned_dofsets", "summed_omega2"]
+__all__ = ["as_interactions", "owned_dofsets", "prescribe_displacements", "summed_omega2"]
 
 
 def as_interactions(interactions: Interaction | Iterable[Interaction] | None
@@ -50,3 +50,30 @@ def summed_omega2(interactions: list[Interaction], names: Iterable[str]) -> dict
                                  f"got {value}")
             w2[name] += float(value)
     return w2
+
+
+def prescribe_displacements(model, sets, displacement: Mapping[str, Sequence[float | None]]
+                            ) -> None:
+    """Set prescribed dofs to total displacements [m]: ``{prescription name: (ux, uy)}``
+    (``None``: leave that component as it is). A name is the model's prescription or one
+    of a dof set's (``sets``: objects with ``u`` and ``prescriptions``, e.g. a pulled
+    anchor end)."""
+    by_name = {p.name: p for p in model.prescriptions}
+    u = model.u.x.array
+    for name, val in displacement.items():
+        if len(val) != 2:
+            raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
+        owner = next((s for s in sets if name in s.prescriptions), None)
+        if owner is not None:
+            dofs = owner.prescriptions[name]
+            for comp in (0, 1):
+                if val[comp] is not None:
+                    owner.u[dofs[comp]] = float(val[comp])
+            continue
+        if name not in by_name:
+            names = sorted([*by_name, *(n for s in sets for n in s.prescriptions)])
+            raise ValueError(f"no prescription named {name!r}; have {names}")
+        p = by_name[name]
+        for comp in (0, 1):
+            if val[comp] is not None:
+                u[p.dofs[p.components == comp]] = float(val[comp])

@@ -48,7 +48,7 @@ import numpy as np
 
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
-from masonry_fdem.solvers._setup import as_interactions, owned_dofsets
+from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescribe_displacements
 
 __all__ = ["DynamicRelaxation", "DRResult"]
 
@@ -289,26 +289,7 @@ class DynamicRelaxation:
 
     def prescribe(self, displacement: Mapping[str, Sequence[float | None]]) -> None:
         """Set prescribed dofs to total displacements [m] (see :meth:`solve`)."""
-        by_name = {p.name: p for p in self.model.prescriptions}
-        u = self.model.u.x.array
-        for name, val in displacement.items():
-            if len(val) != 2:
-                raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
-            owner = next((s for s in self.sets[1:] if name in s.prescriptions), None)
-            if owner is not None:
-                dofs = owner.prescriptions[name]
-                for comp in (0, 1):
-                    if val[comp] is not None:
-                        owner.u[dofs[comp]] = float(val[comp])
-                continue
-            if name not in by_name:
-                names = sorted([*by_name, *(n for s in self.sets for n in s.prescriptions)])
-                raise ValueError(f"no prescription named {name!r}; have {names}")
-            p = by_name[name]
-            for comp in (0, 1):
-                if val[comp] is not None:
-                    sel = p.components == comp
-                    u[p.dofs[sel]] = float(val[comp])
+        prescribe_displacements(self.model, self.sets[1:], displacement)
 
     def _resisting_force(self) -> None:
         """Into ``res`` of every set: f_int(u) − f_interactions(u) [N], what the applied

@@ -46,7 +46,7 @@ import masonry_fdem._compat  # noqa: F401  (dolfinx_solver before petsc4py)
 from petsc4py import PETSc
 
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tangent
-from masonry_fdem.solvers._setup import as_interactions, owned_dofsets
+from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescribe_displacements
 from masonry_fdem.solvers.status import RunStatus, Status
 
 __all__ = ["StaticSolver", "NewtonResult", "StaticRun"]
@@ -434,25 +434,7 @@ class StaticSolver:
 
     def prescribe(self, displacement: Mapping[str, Sequence[float | None]]) -> None:
         """Set prescribed dofs to total displacements [m] (see :meth:`solve`)."""
-        by_name = {p.name: p for p in self.model.prescriptions}
-        u = self.model.u.x.array
-        for name, val in displacement.items():
-            if len(val) != 2:
-                raise ValueError(f"displacement of {name!r} needs two components (ux, uy)")
-            owner = next((s for s in self.sets[1:] if name in s.prescriptions), None)
-            if owner is not None:
-                dofs = owner.prescriptions[name]
-                for comp in (0, 1):
-                    if val[comp] is not None:
-                        owner.u[dofs[comp]] = float(val[comp])
-                continue
-            if name not in by_name:
-                names = sorted([*by_name, *(n for s in self.sets for n in s.prescriptions)])
-                raise ValueError(f"no prescription named {name!r}; have {names}")
-            p = by_name[name]
-            for comp in (0, 1):
-                if val[comp] is not None:
-                    u[p.dofs[p.components == comp]] = float(val[comp])
+        prescribe_displacements(self.model, self.sets[1:], displacement)
 
     def reactions(self) -> dict[str, np.ndarray]:
         """Reaction (Rx, Ry) [N] of each prescription at the current state: the force
