@@ -48,12 +48,12 @@ t0 = time.perf_counter()
 res = search(case, space, out=args.out, resume=args.resume, overwrite=not args.resume,
              comm=comm)
 if comm.rank == 0:
-    print(f"dry one-ring arch: unstrengthened {res.baseline / 1e3:.2f} kN; "
+    print(f"dry one-ring arch: unstrengthened {res.baseline_text}; "
           f"{len(space.candidates())} layouts: {len(res.rejected)} rejected, "
           f"{len(res.pruned)} dropped after the coarse runs, {len(res.ranking)} run in full")
     for r in res.ranking[:5]:
-        print(f"  {r.rank}. {r.key}: {r.collapse_load / 1e3:.2f} kN "
-              f"({r.gain / 1e3:+.2f} kN), {r.length:.2f} m, {r.gain_per_metre / 1e3:.2f} kN/m")
+        print(f"  {r.rank}. {r.key}: {r.load_text} ({r.gain / 1e3:+.2f} kN, gain "
+              f"{r.gain_kind}), {r.length:.2f} m, {r.gain_per_metre / 1e3:.2f} kN/m")
     for key, why in res.rejected[:3]:
         print(f"  rejected {key}: {why}")
     print(f"  {res.evaluations} runs in {time.perf_counter() - t0:.0f} s "

@@ -95,6 +95,7 @@ def cmd_assess(args) -> int:
 
     from masonry_fdem.assessment.assess import assess
     from masonry_fdem.assessment.case import load_case
+    from masonry_fdem.assessment.report import status_text
 
     comm = MPI.COMM_WORLD
     case = load_case(args.case)  # every problem of the file, before anything is written
@@ -106,12 +107,20 @@ def cmd_assess(args) -> int:
             print(f"masonry-fdem: {exc}", file=sys.stderr)
         return 1
     if comm.rank == 0:
-        line = (f"{case.name}: collapse load {res.collapse_load / 1e3:.2f} kN "
-                f"(resolution {res.resolution / 1e3:.2f} kN)")
+        print(f"{case.name}: status: {status_text(res)}")
+        if res.collapsed:
+            line = (f"collapse load {res.collapse_load / 1e3:.2f} kN "
+                    f"(resolution {res.resolution / 1e3:.2f} kN)")
+        else:
+            line = (f"no collapse load; lower bound {res.peak_load / 1e3:.2f} kN "
+                    "(the largest load carried)")
         if res.limit_load is not None:
-            line += f"; limit analysis {res.limit_load / 1e3:.2f} kN (ratio {res.ratio:.3f})"
+            line += f"; limit analysis {res.limit_load / 1e3:.2f} kN " + (
+                f"(ratio {res.ratio:.3f})" if res.collapsed
+                else f"(ratio >= {res.bound_ratio:.3f})")
         print(line)
-        print(f"hinges at collapse: {', '.join(e.joint for e in res.hinges_at_collapse)}")
+        print(f"hinges at the peak load: "
+              f"{', '.join(e.joint for e in res.hinges_at_collapse) or 'none'}")
         print(f"report: {res.report.resolve()}")
     return 0
 
@@ -142,10 +151,9 @@ def cmd_repair(args) -> int:
                               progress=progress, comm=comm)
                 if comm.rank == 0:
                     u, a = res.unstrengthened, res.anchored
-                    print(f"{case.name}: unstrengthened {u.collapse_load / 1e3:.2f} kN, "
-                          f"anchored {a.collapse_load / 1e3:.2f} kN"
-                          f"{'' if a.collapsed else ' (run limit reached, no collapse)'}"
-                          f" ({100 * res.gain:+.0f} %, {res.anchor_length:.2f} m of anchor)")
+                    print(f"{case.name}: unstrengthened: {u.status_line}")
+                    print(f"{case.name}: anchored: {a.status_line}")
+                    print(f"gain: {res.gain_text} ({res.anchor_length:.2f} m of anchor)")
                     print(f"report: {res.report.resolve()}")
         if case.search is not None:
             def tick(info):
@@ -159,14 +167,15 @@ def cmd_repair(args) -> int:
             if comm.rank == 0:
                 for key, why in sr.rejected:
                     print(f"rejected {key}: {why}", file=sys.stderr)
-                print(f"search: unstrengthened {sr.baseline / 1e3:.2f} kN; "
+                print(f"search: unstrengthened {sr.baseline_text}; "
                       f"{len(sr.ranking)} layouts ranked, {len(sr.rejected)} rejected, "
                       f"{len(sr.pruned)} dropped as hopeless; {sr.evaluations} runs, "
                       f"{sr.reused} from the journal")
                 if sr.best:
-                    print(f"best: {sr.best.key}: {sr.best.collapse_load / 1e3:.2f} kN, "
+                    print(f"best: {sr.best.key}: {sr.best.load_text}, "
                           f"{sr.best.length:.2f} m of anchor, "
-                          f"{sr.best.gain_per_metre / 1e3:.2f} kN per metre")
+                          f"{sr.best.gain_per_metre / 1e3:.2f} kN per metre "
+                          f"({sr.best.gain_kind})")
                 if sr.target is not None:
                     ch = sr.cheapest
                     print(f"cheapest reaching {sr.target / 1e3:.2f} kN: "

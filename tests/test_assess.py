@@ -1,5 +1,6 @@
 """`assess`: arch to collapse against limit analysis, increment halving, ring separation,
-the command line on bad case files, one process against two (issue #8).
+the command line on bad case files, one process against two (issue #8); the status of a
+run: a stall is not a collapse.
 
 The dry arch: span 2 m, one ring of 0.2 m in 12 voussoirs (E = 10 GPa), dry joints with
 tan φ = 10 (no tension, no sliding), a point load at quarter span. Its limit-analysis load
@@ -10,8 +11,10 @@ a mechanism; the run goes on from there under displacement control and finds the
 from __future__ import annotations
 
 import copy
+import json
 import math
 import re
+from pathlib import Path
 
 from mpi4py import MPI
 
@@ -20,7 +23,9 @@ import pytest
 
 from masonry_fdem.assessment.assess import assess
 from masonry_fdem.assessment.case import CaseError, load_case
+from masonry_fdem.assessment.report import read_curve
 from masonry_fdem.cli import main as cli_main
+from masonry_fdem.solvers import Status
 
 DRY_ARCH = {
     "arch": {"span": 2.0, "ring_thickness": 0.2, "voussoirs": 12, "abutment_height": 0.3,
@@ -81,11 +86,17 @@ def test_run_folder_is_complete(dry_runs):
     assert names == ["curve.csv", "hinges.csv", "hinges.png", "load_displacement.png",
                      "mechanism.png", "report.md", "summary.json"]
     assert not any(p.name.endswith(".partial") for p in folder.parent.iterdir())
-    text = (folder / "report.md").read_text()
+    text = (folder / "report.md").read_text(encoding="utf-8")
+    assert f"**Status: peak passed — collapse load {res.collapse_load / 1e3:.2f} kN.**" in text
     assert f"**{res.collapse_load / 1e3:.2f} kN**" in text
     assert f"{res.limit_load / 1e3:.2f} kN" in text
-    curve = np.loadtxt(folder / "curve.csv", delimiter=",", skiprows=1)
+    status, curve = read_curve(folder / "curve.csv")
+    assert status.startswith("peak passed — collapse load") and "% below it" in status, status
+    assert (folder / "curve.csv").read_text(encoding="utf-8").startswith("# status: peak passed")
     np.testing.assert_allclose(curve[:, 0], res.loads, rtol=1e-5)
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"]["status"] == "peak passed"
+    assert summary["collapse_load"] == pytest.approx(res.collapse_load)
     assert len((folder / "hinges.csv").read_text().splitlines()) == 1 + len(res.events)
 
 
@@ -96,7 +107,8 @@ def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
           + ", ".join(f"{e.joint} {e.kind} opens {e.side}" for e in res.hinges_at_collapse)
           + f"; DR iterations per step {res.iterations}")
     assert res.limit_status == "collapse"
-    assert res.collapsed
+    assert res.status.status is Status.PEAK_PASSED and res.collapsed
+    assert res.collapse_load == res.peak_load == res.status.peak
     # within 5 % of the rigid-block LP, and not above it
     assert 0.95 <= res.ratio <= 1.0 + 1e-3, res.ratio
     # four hinges, at the joints of the LP mechanism, about the same edge
@@ -117,6 +129,7 @@ def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
 
 
 def test_halving_the_load_increment(dry_runs):
+    assert dry_runs[1000.0].status.status is Status.PEAK_PASSED
     a, b = dry_runs[2000.0].collapse_load, dry_runs[1000.0].collapse_load
     print(f"\nincrement 2000 N: {a:.2f} N, 1000 N: {b:.2f} N, change {abs(a - b) / a:.2e}")
     assert abs(a - b) / a < 0.03, (a, b)
@@ -146,11 +159,14 @@ def test_ring_separation_lowers_the_collapse_load():
                          comm=c),
         lambda c: assess(load_case(base, name="bonded"), write=False, progress=False,
                          comm=c)])
-    print(f"\nring-separated: {r_sep.collapse_load:.0f} N (collapsed {r_sep.collapsed}), "
-          f"bonded: {r_bond.collapse_load:.0f} N (collapsed {r_bond.collapsed})")
-    assert r_sep.collapsed and r_sep.collapse_load < 15000.0
-    assert not r_bond.collapsed and r_bond.collapse_load == pytest.approx(15000.0)
-    assert r_sep.collapse_load < r_bond.collapse_load
+    print(f"\nring-separated: {r_sep.status_line}; bonded: {r_bond.status_line}")
+    # the separated arch stalls (not followed): a lower bound, no collapse load
+    assert r_sep.status.status is Status.NOT_CONVERGED and r_sep.collapse_load is None
+    assert r_sep.peak_load < 15000.0 and r_sep.status.at == pytest.approx(
+        r_sep.peak_load + 5000.0)
+    assert r_bond.status.status is Status.LOAD_REACHED and r_bond.collapse_load is None
+    assert r_bond.peak_load == pytest.approx(15000.0)
+    assert r_sep.peak_load < r_bond.peak_load
 
 
 BAD_CASES = [
@@ -206,6 +222,7 @@ def test_one_process_and_two_give_the_same_collapse_load(dry_runs):
         pytest.skip("compares a parallel run with a serial one: run under mpirun -n 2")
     serial = dry_runs["one process"]
     par = dry_runs[2000.0]
+    assert serial.status.status is par.status.status is Status.PEAK_PASSED
     print(f"\none process {serial.collapse_load:.3f} N, {comm.size} processes "
           f"{par.collapse_load:.3f} N")
     assert math.isclose(serial.collapse_load, par.collapse_load, rel_tol=2e-3), (
@@ -247,3 +264,77 @@ def test_damage_scenarios_reach_the_model():
     _, ns, ft = build([{"type": "decayed_mortar", "factor": 0.5, "from": 0.2, "to": 0.6}])
     assert ns == ns0
     assert st0 == {0.1e6} and ft == {0.1e6, 0.05e6}
+
+
+def test_a_run_starved_of_iterations_is_not_a_collapse(tmp_path, capsys):
+    """The dry arch with 3000 DR iterations per step: self-weight (~1600) and 2 kN (~2500)
+    converge, 4 kN (~27 000 with enough) does not. Under load control alone the run ends
+    *not converged at 4 kN*, having carried 2 kN; with follow_peak the platen is then
+    driven down and the first displacement step does not converge either. Neither is a
+    collapse: no collapse load, 2 kN a lower bound — in the API, curve.csv, report.md,
+    summary.json and the command line's output."""
+    comm = MPI.COMM_WORLD
+    starved = copy.deepcopy(DRY_ARCH)
+    starved["analysis"].update(max_iterations=3000, limit_analysis=False, follow_peak=False)
+    res = assess(load_case(starved, name="starved"), write=False, progress=False)
+    print(f"\nload control: {res.status_line} ({res.status.detail})")
+    assert res.status.status is Status.NOT_CONVERGED and not res.collapsed
+    assert res.collapse_load is None and res.ratio is None
+    assert res.peak_load == pytest.approx(2000.0) and res.status.at == pytest.approx(4000.0)
+    assert res.status_line == ("not converged at 4.00 kN — the arch carried 2.00 kN, a "
+                               "lower bound of its collapse load")
+
+    # the command line, load control followed under displacement control
+    root = Path(comm.bcast(str(tmp_path) if comm.rank == 0 else None, root=0))
+    starved["analysis"].update(follow_peak=True, output=str(root / "run"))
+    case_file = root / "starved.toml"
+    if comm.rank == 0:
+        case_file.write_text(_toml(starved))
+    comm.barrier()
+    assert cli_main(["assess", str(case_file), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    folder = root / "run"
+    if comm.rank == 0:
+        print(out)
+        assert "status: not converged at" in out and "mm load-line displacement" in out
+        assert "no collapse load; lower bound 2.00 kN" in out
+        assert "collapse load 2.00" not in out
+    text = (folder / "report.md").read_text(encoding="utf-8")
+    assert "**Status: not converged at" in text
+    assert "the arch carried 2.00 kN, a lower bound of its collapse load" in text
+    assert "collapse reached" not in text and "FDEM collapse load" not in text
+    assert "load control: no equilibrium at 4.00 kN within max_iterations = 3000" in text
+    status, curve = read_curve(folder / "curve.csv")
+    assert status.startswith("not converged at") and "a lower bound" in status
+    np.testing.assert_allclose(curve[:, 0], [0.0, 2000.0], atol=1e-6)
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["status"]["status"] == "not converged"
+    assert summary["collapse_load"] is None
+    assert summary["peak_load"] == pytest.approx(2000.0)
+
+
+def _toml(data: dict) -> str:
+    """A case dict as TOML (tables of scalars and lists)."""
+    def value(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        return repr(v)
+
+    lines = []
+
+    def table(prefix, d):
+        scalars = {k: v for k, v in d.items() if not isinstance(v, dict)}
+        if scalars or not prefix:
+            if prefix:
+                lines.append(f"[{prefix}]")
+            lines.extend(f"{k} = {value(v)}" for k, v in scalars.items())
+        for k, v in d.items():
+            if isinstance(v, dict):
+                table(f"{prefix}.{k}" if prefix else k, v)
+
+    table("", data)
+    return "\n".join(lines) + "\n"

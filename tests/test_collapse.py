@@ -11,15 +11,17 @@ from masonry_fdem import Material, Model
 from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.geometry import BlockLayout, rectangle
 from masonry_fdem.solvers.limit_analysis import limit_analysis
-from masonry_fdem.solvers import DynamicRelaxation
+from masonry_fdem.solvers import DynamicRelaxation, Status
 
 
 def test_rocking_block_collapses_at_the_overturning_load():
     """A 0.5 × 1 m block (600 kg/m³, 1 m wide) on a fixed base, pushed sideways at its top
     corner: it overturns about its toe at P = W b / (2 h) = 735.50 N (the rigid-block limit
     analysis gives the same). Dynamic relaxation in increments of 0.2 P, each failed
-    increment restored and halved four times, finds the collapse within 5 % below it
-    (elastic blocks, penalty contact: the toe is not a perfect point) and never above."""
+    increment restored and halved four times, stalls within 5 % below it (elastic blocks,
+    penalty contact: the toe is not a perfect point) and never above. A stall proves no
+    collapse: the run ends *not converged* at the load tried, with no collapse load and
+    the last load carried a lower bound."""
     lay = BlockLayout((rectangle(-0.5, -0.2, 1.0, 0.0), rectangle(0.0, 0.0, 0.5, 1.0)),
                       ("base", "brick"), ("base", "block"))
     W = 600.0 * 0.5 * 1.0 * 1.0 * 9.80665
@@ -40,9 +42,14 @@ def test_rocking_block_collapses_at_the_overturning_load():
                            max_iter=40_000)
     assert dr.solve(0.0).converged
     res = dr.load_to_collapse(0.2 * exact, refinements=4)
-    print(f"\nrocking block: collapse {res.load_factor:.2f} N (+{res.resolution:.2f}) against "
-          f"{exact:.2f} N: {res.load_factor / exact:.4f}; {len(dr.results)} solves")
-    assert res.collapsed
+    print(f"\nrocking block: {res.status.describe('N')}; {res.load_factor:.2f} N "
+          f"(+{res.resolution:.2f}) against {exact:.2f} N: {res.load_factor / exact:.4f}; "
+          f"{len(dr.results)} solves")
+    st = res.status
+    assert st.status is Status.NOT_CONVERGED and not res.collapsed
+    assert st.collapse_load is None and res.collapse_load_factor is None
+    assert st.lower_bound == res.load_factor == st.load
+    assert st.at == pytest.approx(res.load_factor + res.resolution)
     assert 0.95 * exact <= res.load_factor <= exact
     assert res.resolution == pytest.approx(0.2 * exact / 16)
     # the state was restored after the failed increment: the last load holds at once
@@ -50,6 +57,10 @@ def test_rocking_block_collapses_at_the_overturning_load():
     again = dr.solve(res.load_factor)
     assert again.converged
     assert np.abs(model.displacement() - u).max() < 1e-3 * np.abs(u).max()
+    # a load it carries is "load reached", no collapse load either
+    res = dr.load_to_collapse(0.2 * exact, start=0.0, max_load=0.5 * exact)
+    assert res.status.status is Status.LOAD_REACHED and not res.collapsed
+    assert res.load_factor == pytest.approx(0.5 * exact) and res.status.collapse_load is None
 
 
 def test_damping_estimates_reach_the_same_equilibrium():

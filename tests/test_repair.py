@@ -19,8 +19,9 @@ import pytest
 from masonry_fdem.assessment.assess import assess
 from masonry_fdem.assessment.case import AnchorLayout, CaseError, SearchSpec, load_case
 from masonry_fdem.cli import main as cli_main
-from masonry_fdem.assessment.repair import compare
-from masonry_fdem.assessment.search import SearchInterrupted, search
+from masonry_fdem.assessment.repair import BASELINE, compare, gain_kind, gain_text
+from masonry_fdem.assessment.search import SearchInterrupted, _fingerprint, search
+from masonry_fdem.solvers import Status
 
 MATERIALS = {"brick": {"density": 2000.0, "E": 10e9, "nu": 0.2},
              "abutment": {"density": 2000.0, "E": 30e9, "nu": 0.2}}
@@ -54,25 +55,31 @@ def _shared_tmp(tmp_path_factory, name: str) -> Path:
 
 
 def test_anchoring_raises_the_ring_separated_arch_by_half(tmp_path_factory):
-    """The unstrengthened arch loses equilibrium after 12.4 kN; the anchored one carries
-    ``max_load`` = 21 kN, at least 1.5 times a bound of that peak (the reference paper
-    measured about 2x for its arch: 20 t to 41 t)."""
+    """The unstrengthened arch finds no equilibrium one step after 12.4 kN (not
+    converged: a lower bound); the anchored one carries ``max_load`` = 21 kN (load
+    reached: a lower bound too), at least 1.5 times a bound of that peak (the reference
+    paper measured about 2x for its arch: 20 t to 41 t). From two lower bounds the gain
+    is not a measured gain, and the report says so."""
     out = _shared_tmp(tmp_path_factory, "compare") / "run"
     res = compare(load_case(THREE_RING, name="three_ring"), out=out, progress=False)
     u, a = res.unstrengthened, res.anchored
-    print(f"\nring-separated three-ring arch: unstrengthened {u.collapse_load:.0f} N "
-          f"(curve {[round(x) for x in u.loads]}), anchored {a.collapse_load:.0f} N "
-          f"(curve {[round(x) for x in a.loads]}, collapsed {a.collapsed}); gain "
-          f"{100 * res.gain:+.1f} %; bar forces "
-          + ", ".join(f"{x['name']} {x['force_max']:.0f} N" for x in a.anchors))
-    # the unstrengthened arch finds no equilibrium one step further (or falls)
-    assert u.collapsed and u.collapse_load < 21000.0
+    print(f"\nring-separated three-ring arch: unstrengthened: {u.status_line} "
+          f"({u.status.detail}; curve {[round(x) for x in u.loads]}), anchored: "
+          f"{a.status_line} (curve {[round(x) for x in a.loads]}); gain {res.gain_text}; "
+          "bar forces " + ", ".join(f"{x['name']} {x['force_max']:.0f} N" for x in a.anchors))
+    # the unstrengthened arch finds no equilibrium one step further: no collapse load
+    assert u.status.status is Status.NOT_CONVERGED and u.collapse_load is None
+    assert u.peak_load < 21000.0
     # its true peak lies between steps; the curve is concave, so it rises over the next
-    # step by no more than over the last: peak <= collapse_load + resolution (0.05 mm
+    # step by no more than over the last: peak <= peak_load + resolution (0.05 mm
     # steps give 13.1 kN)
-    bound = u.collapse_load + u.resolution
-    assert not a.collapsed and a.collapse_load >= 21000.0  # carried max_load
-    assert a.collapse_load >= 1.5 * bound, (a.collapse_load, bound)
+    bound = u.peak_load + u.resolution
+    # the anchored arch carries max_load: a lower bound too
+    assert a.status.status is Status.LOAD_REACHED and a.collapse_load is None
+    assert a.peak_load >= 21000.0
+    assert a.peak_load >= 1.5 * bound, (a.peak_load, bound)
+    # two lower bounds: not a measured gain
+    assert res.gain_kind == "not measured" and res.gain_text.startswith("not measured")
     # the anchors carry it, in tension, below yield
     for x in a.anchors:
         assert 1000.0 < x["force_max"] < x["yield_force"]
@@ -80,12 +87,19 @@ def test_anchoring_raises_the_ring_separated_arch_by_half(tmp_path_factory):
     names = sorted(p.name for p in out.iterdir())
     assert names == ["anchored", "anchors.png", "curves.png", "report.md", "summary.json",
                      "unstrengthened"]
-    text = (out / "report.md").read_text()
-    assert f"**{u.collapse_load / 1e3:.2f} kN**" in text
-    assert f"**{a.collapse_load / 1e3:.2f} kN**" in text
+    text = (out / "report.md").read_text(encoding="utf-8")
+    assert "| status | not converged at 0.3 mm load-line displacement | load reached |" in text
+    assert f"**{u.peak_load / 1e3:.2f} kN**" in text
+    assert f"**{a.peak_load / 1e3:.2f} kN**" in text
+    assert "Gain: **not measured" in text and "collapse reached" not in text
     assert (out / "anchored" / "mechanism.png").is_file()
+    assert "**Status: load reached" in (out / "anchored" / "report.md").read_text(
+        encoding="utf-8")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["gain"] == pytest.approx(res.gain)
+    assert summary["gain_kind"] == "not measured"
+    assert summary["unstrengthened_collapse_load_N"] is None
+    assert summary["anchored_status"]["status"] == "load reached"
 
 
 # the dry one-ring arch of tests/test_assess.py (LA load 5.11 kN), driven down at quarter
@@ -123,17 +137,22 @@ def searches(tmp_path_factory):
 
 def test_search_finds_the_exhaustive_best(searches):
     exhaustive, straight, _ = searches
-    print("\nexhaustive: " + "; ".join(f"{r.key} {r.collapse_load:.0f} N "
+    print("\nexhaustive: " + "; ".join(f"{r.key} {r.load_text} "
                                        f"{r.gain_per_metre:.0f} N/m" for r in exhaustive.ranking)
           + f" (baseline {exhaustive.baseline:.0f} N, {exhaustive.evaluations} runs)")
-    print("search: " + "; ".join(f"{r.key} {r.collapse_load:.0f} N" for r in straight.ranking)
+    print("search: " + "; ".join(f"{r.key} {r.load_text}" for r in straight.ranking)
           + f"; coarse {straight.coarse}; pruned {[k for k, _ in straight.pruned]}; "
           f"{straight.evaluations} runs")
     assert len(exhaustive.ranking) == 3 and not exhaustive.pruned
     assert straight.pruned  # the coarse level dropped something ...
     assert straight.best.key == exhaustive.best.key  # ... and kept the best
-    assert straight.best.collapse_load == exhaustive.best.collapse_load
+    assert straight.best.peak_load == exhaustive.best.peak_load
+    assert straight.best.status == exhaustive.best.status
     assert straight.baseline == exhaustive.baseline
+    # measured collapse loads rank before lower bounds
+    for res in (exhaustive, straight):
+        measured = [r.collapsed for r in res.ranking]
+        assert measured == sorted(measured, reverse=True)
     # anchoring helps: the best layout carries more than the bare arch
     assert exhaustive.best.gain > 0
     # the written ranking
@@ -149,8 +168,8 @@ def test_interrupted_search_resumes_to_the_same_ranking(searches):
           f"ranking {[r.key for r in resumed.ranking]}")
     assert resumed.reused >= 3 and resumed.evaluations >= 1  # (runs go in rounds)
     assert resumed.reused + resumed.evaluations == straight.evaluations
-    assert [(r.key, r.collapse_load) for r in resumed.ranking] == \
-        [(r.key, r.collapse_load) for r in straight.ranking]
+    assert [(r.key, r.peak_load, r.status) for r in resumed.ranking] == \
+        [(r.key, r.peak_load, r.status) for r in straight.ranking]
     assert [k for k, _ in resumed.pruned] == [k for k, _ in straight.pruned]
 
 
@@ -167,6 +186,51 @@ def test_bad_layouts_are_rejected_and_the_search_goes_on(searches):
     assert len(straight.ranking) + len(straight.pruned) == 3  # every valid one was run
     text = (straight.folder / "report.md").read_text()
     assert "## Rejected" in text and "overlap" in text
+
+
+def test_a_lower_bound_never_outranks_a_measured_collapse_load(tmp_path_factory):
+    """A search resumed from a journal of finished fine runs (nothing is run): the one
+    layout whose run passed its peak ranks first although two layouts whose runs ended
+    without a collapse load carried more; those are shown as lower bounds, their gains
+    as bounds or not measured."""
+    assert [gain_kind(a, b) for a, b in ((True, True), (True, False), (False, True),
+                                         (False, False))] == [
+        "measured", "lower bound", "upper bound", "not measured"]
+    assert gain_text(0.5, "lower bound") == "at least +50 %"
+    assert gain_text(0.5, "not measured").startswith("not measured")
+    root = _shared_tmp(tmp_path_factory, "journal")
+    case = load_case(DRY, name="dry")
+    space = SearchSpec(positions=(0.1, 0.36, 0.7), counts=(1,), inclinations=(20.0,),
+                       coarse=False)
+    keys = [lay.key for lay in space.candidates()]
+    runs = {BASELINE: ("peak passed", 4900.0), keys[0]: ("displacement limit reached", 6000.0),
+            keys[1]: ("peak passed", 5200.0), keys[2]: ("not converged", 5500.0)}
+    folder = root / "search"
+    if MPI.COMM_WORLD.rank == 0:
+        folder.mkdir()
+        (folder / "search.json").write_text(json.dumps(
+            {"fingerprint": _fingerprint(case, space)}))
+        with open(folder / "journal.jsonl", "w") as fh:
+            for key, (status, load) in runs.items():
+                measured = Status(status).gives_collapse_load
+                fh.write(json.dumps({
+                    "level": "fine", "key": key, "status": status, "peak_load": load,
+                    "collapse_load": load if measured else None, "detail": "",
+                    "resolution": 100.0, "length": 0.3, "steps": 3, "elapsed": 0.0}) + "\n")
+    MPI.COMM_WORLD.barrier()
+    res = search(case, space, out=folder, resume=True)
+    print("\n" + "; ".join(f"{r.rank}. {r.key}: {r.load_text}, gain {r.gain_kind}"
+                           for r in res.ranking))
+    assert res.evaluations == 0 and res.reused == 4
+    assert [r.key for r in res.ranking] == [keys[1], keys[0], keys[2]]
+    assert [r.collapsed for r in res.ranking] == [True, False, False]
+    assert res.ranking[0].collapse_load == 5200.0 and res.ranking[1].collapse_load is None
+    assert [r.gain_kind for r in res.ranking] == ["measured", "lower bound", "lower bound"]
+    assert res.ranking[1].load_text == ">= 6.00 kN (lower bound: displacement limit reached)"
+    text = (folder / "report.md").read_text(encoding="utf-8")
+    assert f"| 2 | {keys[0]} | " in text and "| displacement limit reached | ≥ 6.00 |" in text
+    rows = (folder / "ranking.csv").read_text().splitlines()
+    assert "status" in rows[0] and "not converged" in rows[3]
 
 
 def test_anchors_leaving_the_arch_in_a_case_file_are_refused():
@@ -234,12 +298,14 @@ def test_cheapest_layout_reaching_a_target_stops_early(tmp_path_factory):
     res = search(load_case(DRY, name="dry"), space, out=root / "run",
                  group_size=MPI.COMM_WORLD.size)
     print(f"\ncheapest: {res.cheapest.key if res.cheapest else None}; ranking "
-          f"{[(r.key, round(r.collapse_load), r.reaches_target) for r in res.ranking]}; "
+          f"{[(r.key, round(r.peak_load), r.status, r.reaches_target) for r in res.ranking]}; "
           f"pruned {res.pruned}")
     two = "s=[0.36,0.7] 20deg through P=0N"
     assert res.cheapest is not None and res.cheapest.key == "s=[0.36] 20deg through P=0N"
-    assert res.cheapest.collapse_load >= 5300.0
-    assert res.cheapest.collapse_load < 6000.0  # stopped at the target, not at its peak
+    assert res.cheapest.peak_load >= 5300.0
+    assert res.cheapest.peak_load < 6000.0  # stopped at the target, not at its peak
+    # ... so its run gives no collapse load, only proof that it carries the target
+    assert res.cheapest.status == "load reached" and res.cheapest.collapse_load is None
     assert two in dict(res.pruned) and "no shorter than" in dict(res.pruned)[two]
     assert two not in {r.key for r in res.ranking}
 
@@ -254,8 +320,9 @@ def test_prestressed_anchor_is_locked_off_before_the_load():
     res = assess(load_case(data, name="prestressed"), write=False, progress=False)
     f = res.anchors[0]["force"]
     print(f"\nprestressed anchor: bar forces {min(f):.0f}..{max(f):.0f} N at "
-          f"{res.collapse_load:.0f} N of live load")
-    assert not res.collapsed and res.collapse_load == pytest.approx(1000.0)
+          f"{res.peak_load:.0f} N of live load")
+    assert res.status.status is Status.LOAD_REACHED and res.collapse_load is None
+    assert res.peak_load == pytest.approx(1000.0)
     assert min(f) == pytest.approx(15000.0, rel=0.05)
     assert max(f) == pytest.approx(15000.0, rel=0.05)
 

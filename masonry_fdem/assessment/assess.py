@@ -13,14 +13,22 @@ CASE.toml`` on the command line):
    :mod:`masonry_fdem.solvers.dynamic_relaxation`):
 
    * ``control = "load"``: the load on the spreader grows by ``increment`` [N]; an
-     increment without equilibrium is undone and halved ``refinements`` times; the
-     collapse load is the last load carried, within the last increment tried;
+     increment without equilibrium is undone and halved ``refinements`` times. A stall
+     is not a collapse (near the peak the structure is so soft that the equilibrium
+     iterations run out): with ``follow_peak`` the run goes on from the last
+     equilibrium under displacement control, as below; without it, it ends *not
+     converged* at the load tried, the last load carried a lower bound;
    * ``control = "displacement"``: a rigid platen (the nodes under the spreader's ends)
      is driven down in steps of ``displacement_increment`` [m] from its self-weight
-     position; the load is the platen's reaction and the collapse load its peak. This
-     traces the post-peak branch and reaches the peak where load control stops short
-     (near the peak the structure is so soft that equilibrium iterations stall);
-4. after every converged step the opening of every radial joint (springings included) at
+     position; the load is the platen's reaction. This traces the post-peak branch and
+     reaches the peak where load control stops short;
+4. one status (:class:`~masonry_fdem.solvers.status.RunStatus`) ends every run:
+   *peak passed* (the load fell ``post_peak_drop`` below its peak, or stayed below it for
+   ``post_peak_steps`` steps): the peak is the collapse load; *not converged* (a step
+   found no equilibrium within ``max_iterations``), *displacement limit reached*
+   (``max_displacement``) or *load reached* (``max_load`` carried): no collapse load, the
+   largest load carried is a lower bound of it;
+5. after every converged step the opening of every radial joint (springings included) at
    its two ends, beyond the self-weight state: an end opens past ``hinge_opening`` [m]
    while the other stays closed: a hinge (its side, intrados or extrados, named); both
    ends open: the joint has separated. The first load at which each joint does so is the
@@ -30,12 +38,13 @@ Every output goes to one run folder, written only when the run is complete (the 
 are assembled in a hidden sibling folder and moved in at the end; a run that fails
 leaves nothing): ``report.md`` (the summary with pictures), ``load_displacement.png``,
 ``mechanism.png`` (deformed blocks, magnified), ``hinges.png`` (the hinges of FDEM and of
-the limit analysis on the arch), ``curve.csv``, ``hinges.csv``, ``summary.json`` and the
-case file. Units are SI: N, m.
+the limit analysis on the arch), ``curve.csv`` (its first line ``# status: ...``),
+``hinges.csv``, ``summary.json`` and the case file. Units are SI: N, m.
 """
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Callable, Mapping
@@ -52,8 +61,12 @@ from masonry_fdem.assessment.specs import classify_interface
 from masonry_fdem.geometry.arches import arch_centre, arch_parameter
 from masonry_fdem.assessment.report import write_run_folder
 from masonry_fdem.io.rundir import run_folder_problem
+from masonry_fdem.solvers.status import RunStatus, Status
 
-__all__ = ["Assessment", "JointEvent", "anchor_state", "assess", "build_model"]
+__all__ = ["Assessment", "JointEvent", "anchor_state", "assess", "build_model",
+           "status_dict", "status_from_dict"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -91,30 +104,34 @@ class Assessment:
     Attributes:
         case: the case name.
         control: "load" or "displacement".
-        collapse_load: the largest load carried (load control: the last converged load;
-            displacement control: the peak reaction).
+        status: how the run ended (:class:`~masonry_fdem.solvers.status.RunStatus`, loads
+            [N]; ``at``: the load [N] tried, or the load-line displacement [m] tried when
+            ``stopped_under`` is "displacement"); :attr:`status_line` says it in words.
+        peak_load: the largest load carried: the collapse load if the status gives one,
+            else a lower bound of it.
         resolution: the load step that failed last (load control) or the largest load
             change between the peak and its neighbouring steps (displacement control).
-        collapsed: False if ``max_load`` (or ``max_displacement``) was reached first.
         loads, displacements: the load–displacement curve at the load line (converged
             steps; displacement downward positive), self-weight state first.
         iterations: DR iterations of each point of the curve.
         events: the hinge sequence.
-        hinges_at_collapse: the joints open at the collapse state.
+        hinges_at_collapse: the joints open at the peak load.
         limit_load: the limit-analysis collapse load (None if not run), ``limit_status``
             its LP status and ``limit_hinges`` its hinges (``(blocks, position)``).
         folder, report: the run folder and ``report.md`` (None if not written).
         cells, elapsed: the mesh size and the wall time [s].
-        anchors: per anchor at the collapse state (see :func:`anchor_state`); empty
+        anchors: per anchor at the peak load (see :func:`anchor_state`); empty
             without anchors.
         anchor_length: Σ count × length of the anchors [m] (0 without anchors).
+        stopped_under: "load" or "displacement": the control of the last step (under
+            load control with ``follow_peak`` the run may end under displacement control).
     """
 
     case: str
     control: str
-    collapse_load: float
+    status: RunStatus
+    peak_load: float
     resolution: float
-    collapsed: bool
     loads: np.ndarray
     displacements: np.ndarray
     iterations: list[int]
@@ -130,13 +147,68 @@ class Assessment:
     elapsed: float = 0.0
     anchors: list[dict] = field(default_factory=list)
     anchor_length: float = 0.0
+    stopped_under: str = "load"
+
+    @property
+    def collapse_load(self) -> float | None:
+        """The collapse load [N] if the run proved one (peak passed, mechanism), else None
+        (then :attr:`peak_load` is a lower bound of it)."""
+        return self.status.collapse_load
+
+    @property
+    def collapsed(self) -> bool:
+        """Whether the run proved a collapse load."""
+        return self.status.status.gives_collapse_load
 
     @property
     def ratio(self) -> float | None:
-        """FDEM collapse load / limit-analysis load."""
+        """FDEM collapse load / limit-analysis load (None without either; for a run
+        without a collapse load see :attr:`bound_ratio`)."""
+        if self.collapse_load is None:
+            return None
+        return self.bound_ratio
+
+    @property
+    def bound_ratio(self) -> float | None:
+        """FDEM largest load carried / limit-analysis load (a lower bound of the ratio
+        when the run gives no collapse load)."""
         if not self.limit_load or not math.isfinite(self.limit_load):
             return None
-        return self.collapse_load / self.limit_load
+        return self.peak_load / self.limit_load
+
+    @property
+    def status_line(self) -> str:
+        """The status in words, e.g. "peak passed — collapse load 12.20 kN" or "not
+        converged at 12.50 kN — the arch carried 12.20 kN, a lower bound of its collapse
+        load" (without the detail)."""
+        st = self.status
+        carried = f"{st.peak / 1e3:.2f} kN"
+        if st.status.gives_collapse_load:
+            return f"{st.status.value} — collapse load {carried}"
+        if st.status is Status.NOT_CONVERGED:
+            if st.at is None:
+                where = ""
+            elif self.stopped_under == "displacement":
+                where = f" at {st.at * 1e3:.3g} mm load-line displacement"
+            else:
+                where = f" at {st.at / 1e3:.2f} kN"
+            head = f"not converged{where}"
+        else:
+            head = st.status.value
+        return f"{head} — the arch carried {carried}, a lower bound of its collapse load"
+
+
+def status_dict(status: RunStatus) -> dict:
+    """A :class:`RunStatus` as a JSON-able dict (:func:`status_from_dict` reads it back)."""
+    return {"status": status.status.value, "load": float(status.load),
+            "peak": float(status.peak), "at": None if status.at is None else float(status.at),
+            "detail": status.detail, "collapse_load": status.collapse_load}
+
+
+def status_from_dict(d: Mapping[str, Any]) -> RunStatus:
+    """The :class:`RunStatus` of a :func:`status_dict`."""
+    return RunStatus(Status(d["status"]), float(d["load"]), float(d["peak"]),
+                     None if d.get("at") is None else float(d["at"]), d.get("detail", ""))
 
 
 # ---------------------------------------------------------------------------- the model
@@ -329,8 +401,9 @@ def assess(
         res = dr.solve(0.0)
         res = replace(res, iterations=res.iterations + it0)
     if not res.converged:
-        raise RuntimeError(f"{case.name}: no equilibrium under self-weight "
-                           f"({res.iterations} iterations); the arch cannot stand")
+        raise RuntimeError(f"{case.name}: no equilibrium under self-weight within "
+                           f"{res.iterations} iterations (analysis.max_iterations): the "
+                           "arch cannot stand, or needs more iterations")
     monitor.base = monitor.openings() + monitor.base
     loads, disps, iters = [0.0], [0.0], [res.iterations]
     events: list[JointEvent] = []
@@ -363,7 +436,9 @@ def assess(
 
     open_at_collapse: list = []
     anchors_at_collapse: list = state["anchors"]
-    collapse, resolution, collapsed = 0.0, 0.0, False
+    collapse, resolution = 0.0, 0.0
+    status: RunStatus | None = None
+    stalled = ""  # under load control with follow_peak: where load control stalled
     drive_from = None  # load-line displacement [m] where displacement control starts
     if ld.control is LoadControl.LOAD:
         for p in points:
@@ -375,10 +450,18 @@ def assess(
 
         cres = dr.load_to_collapse(ld.increment, max_load=ld.max_load or math.inf,
                                    refinements=an.refinements, callback=on_step)
-        collapse, resolution, collapsed = cres.load_factor, cres.resolution, cres.collapsed
+        collapse, resolution = cres.load_factor, cres.resolution
         open_at_collapse = state["open"]
         anchors_at_collapse = state["anchors"]
-        if collapsed and an.follow_peak:
+        st = cres.status
+        if st.status is Status.LOAD_REACHED:
+            status = replace(st, detail=f"max_load = {ld.max_load / 1e3:.2f} kN carried")
+        else:
+            stalled = (f"load control: no equilibrium at {st.at / 1e3:.2f} kN within "
+                       f"max_iterations = {an.max_iterations}, refinements = "
+                       f"{an.refinements}")
+            status = replace(st, detail=stalled)
+        if st.status is Status.NOT_CONVERGED and an.follow_peak:
             # no equilibrium within the iteration limit is not yet proof that none
             # exists (near the peak the structure is so soft that DR stalls): go on from
             # the last equilibrium by driving the platen down
@@ -388,7 +471,9 @@ def assess(
             dstep = ld.displacement_increment or max(disps[-1] / 4.0, 1e-5 * case.arch.span)
     else:
         drive_from, dstep = 0.0, ld.displacement_increment
+    stopped_under = ld.control.value
     if drive_from is not None:
+        stopped_under = "displacement"
         sel = [int(n) for n in load_nodes]
         ids = comm.allgather([int(model.node_input[n]) for n in sel if n >= 0])
         _prescribe_node_ids(model, {g for part in ids for g in part}, "platen")
@@ -398,15 +483,23 @@ def assess(
                                ke_tol=math.inf, max_iter=an.max_iterations,
                                damping="velocity")
         peak, k_peak, falling = collapse, len(loads) - 1, 0
+        then = f"{stalled}; then " if stalled else ""
         step = 0
         while True:
             step += 1
             d = drive_from + step * dstep
             if ld.max_displacement is not None and d > ld.max_displacement * (1 + 1e-12):
+                status = RunStatus(Status.DISPLACEMENT_LIMIT, loads[-1], peak, None,
+                                   f"{then}max_displacement = "
+                                   f"{ld.max_displacement * 1e3:.3g} mm reached before the "
+                                   "load passed a peak")
                 break
             r = dr.solve(lf, displacement={"platen": (None, u_sw - d)})
             if not r.converged:
-                collapsed = True
+                status = RunStatus(Status.NOT_CONVERGED, loads[-1], peak, d,
+                                   f"{then}displacement control: no equilibrium at "
+                                   f"{d * 1e3:.3g} mm within max_iterations = "
+                                   f"{an.max_iterations}")
                 break
             load = lf - float(dr.reactions()["platen"][1])
             record(load, r.iterations)
@@ -416,24 +509,36 @@ def assess(
                 anchors_at_collapse = state["anchors"]
             else:
                 falling += 1
-            if falling >= an.post_peak_steps or load < (1 - an.post_peak_drop) * peak:
-                collapsed = True
+            fell = 100.0 * (1.0 - load / peak) if peak > 0 else math.nan
+            if load < (1 - an.post_peak_drop) * peak:
+                status = RunStatus(Status.PEAK_PASSED, load, peak, None,
+                                   f"the load fell {fell:.1f} % below its peak "
+                                   f"(post_peak_drop = {an.post_peak_drop:g})")
+                break
+            if falling >= an.post_peak_steps:
+                status = RunStatus(Status.PEAK_PASSED, load, peak, None,
+                                   f"the load stayed below its peak for {falling} "
+                                   f"step(s) (post_peak_steps), {fell:.1f} % below it at "
+                                   "the last")
                 break
             if ld.max_load is not None and load >= ld.max_load:
-                collapsed = False  # carries the load asked for; no collapse sought
+                # carries the load asked for; no collapse sought
+                status = RunStatus(Status.LOAD_REACHED, load, peak, None,
+                                   f"max_load = {ld.max_load / 1e3:.2f} kN carried")
                 break
         if peak > collapse or ld.control is LoadControl.DISPLACEMENT:
             nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
             resolution = max((abs(peak - x) for x in nb), default=peak)
         collapse = peak
+    assert status is not None
     if bar is not None:
         bar.close()
 
     hinges_now = [monitor.event(k, kind, side, 0, load, disp, op)
                   for k, kind, side, load, disp, op in open_at_collapse]
     result = Assessment(
-        case=case.name, control=ld.control.value, collapse_load=float(collapse),
-        resolution=float(resolution), collapsed=bool(collapsed),
+        case=case.name, control=ld.control.value, status=status, peak_load=float(collapse),
+        resolution=float(resolution), stopped_under=stopped_under,
         loads=np.array(loads), displacements=np.array(disps), iterations=iters,
         events=events, hinges_at_collapse=hinges_now, limit_load=limit_load,
         limit_status=None if la is None else str(la.status),
@@ -441,6 +546,8 @@ def assess(
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
         anchor_length=0.0 if anchors is None else anchors.total_length)
     result.elapsed = time.perf_counter() - t_start
+    if comm.rank == 0:
+        log.info("%s: %s (%s)", case.name, result.status_line, status.detail)
     if write:
         write_run_folder(case, result, folder, model, inter, anchors, comm)
     return result

@@ -69,11 +69,13 @@ Schema (``*``: required):
     relative residual of dynamic relaxation (1e-6); ``max_iterations`` per increment
     (200000); ``output`` run folder ("runs/<case file stem>"; relative to the working
     directory); ``refinements`` halvings of a load increment that finds no equilibrium
-    before collapse is declared (4); ``hinge_opening`` [m] opening (beyond the
+    before the run stalls, *not converged* (4: a stall is no collapse load, its last load
+    a lower bound); ``hinge_opening`` [m] opening (beyond the
     self-weight state) at which an end of a joint counts as open (1e-5); ``penalty_factor``
-    of the block contact at dry joints, × E/h (20); displacement control stops once the
-    load has fallen for ``post_peak_steps`` (3) steps after the peak, or below
-    (1 − ``post_peak_drop``) (0.2) of it; ``follow_peak`` (true): under load control, when
+    of the block contact at dry joints, × E/h (20); displacement control stops, *peak
+    passed* (the peak is the collapse load), once the load has stayed below the peak for
+    ``post_peak_steps`` (3) steps, or fallen below (1 − ``post_peak_drop``) (0.2) of it;
+    ``follow_peak`` (true): under load control, when
     an increment finds no equilibrium, go on from the last equilibrium under displacement
     control (steps of ``displacement_increment``, default a quarter of the load-line
     displacement reached) to find the peak and the post-peak branch.

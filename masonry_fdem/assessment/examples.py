@@ -66,9 +66,9 @@ control = "load"               # load | displacement (then displacement_incremen
 limit_analysis = true
 friction = 0.6                 # of the rigid-block limit analysis (no bond)
 dr_rtol = 1e-4                 # out-of-balance force / applied load
-max_iterations = 60000         # per increment; beyond: no equilibrium found
+max_iterations = 60000         # per increment; beyond: not converged (a lower bound)
 refinements = 0                # halvings of an increment that finds no equilibrium
-follow_peak = true             # then go on under displacement control to the peak
+follow_peak = true             # then go on under displacement control past the peak
 post_peak_steps = 2
 # output = "runs/arch"         # default: runs/<case file stem>
 

@@ -2,7 +2,9 @@
 
 :func:`compare` assesses one case twice, without its ``[[anchors]]`` and with them, and
 writes one report: both load–displacement curves on one plot, both mechanisms, the
-anchors' bar forces and bond slips at collapse (``masonry-fdem repair CASE.toml``).
+anchors' bar forces and bond slips at the peak load (``masonry-fdem repair CASE.toml``).
+The gain is measured only when both runs give a collapse load (peak passed); a run
+ending otherwise gives a lower bound, and the gain says so (:func:`gain_kind`).
 
 The layout search is :mod:`masonry_fdem.assessment.search`.
 
@@ -31,20 +33,45 @@ from masonry_fdem.assessment.case import (
     load_case,
 )
 
-__all__ = ["BASELINE", "Comparison", "as_case", "compare", "free_folder"]
+__all__ = ["BASELINE", "Comparison", "as_case", "compare", "free_folder", "gain_kind",
+           "gain_text"]
 
 BASELINE = "unstrengthened"
 _SUBFOLDERS = ("unstrengthened", "anchored")
 
 
 # ------------------------------------------------------------------------ comparison
+def gain_kind(base_collapsed: bool, new_collapsed: bool) -> str:
+    """What a gain ``new / base − 1`` of the largest loads carried is, from whether each
+    run proved a collapse load: "measured" (both), "lower bound" (only the base: the new
+    load is a lower bound, the gain at least this), "upper bound" (only the new one: the
+    base is a lower bound, the gain at most this) or "not measured" (two lower bounds:
+    the gain may be larger or smaller)."""
+    if base_collapsed and new_collapsed:
+        return "measured"
+    if base_collapsed:
+        return "lower bound"
+    if new_collapsed:
+        return "upper bound"
+    return "not measured"
+
+
+def gain_text(gain: float, kind: str) -> str:
+    """A gain [fraction] and its :func:`gain_kind` in words, e.g. "at least +65 %"."""
+    pct = f"{100 * gain:+.0f} %"
+    return {"measured": pct, "lower bound": f"at least {pct}",
+            "upper bound": f"at most {pct}"}.get(
+        kind, f"not measured (two lower bounds; their ratio {pct})")
+
+
 @dataclass
 class Comparison:
     """Result of :func:`compare` (loads [N], lengths [m]).
 
     Attributes:
         unstrengthened, anchored: the two :class:`~masonry_fdem.assessment.assess.Assessment`.
-        gain: anchored / unstrengthened collapse load − 1.
+        gain: anchored / unstrengthened largest load carried − 1: a measured gain only
+            if ``gain_kind`` is "measured" (both runs gave a collapse load).
         anchor_length: Σ bars × length of the anchors [m].
         folder, report: the run folder and its ``report.md`` (None if not written).
     """
@@ -58,7 +85,17 @@ class Comparison:
 
     @property
     def gain(self) -> float:
-        return self.anchored.collapse_load / self.unstrengthened.collapse_load - 1.0
+        return self.anchored.peak_load / self.unstrengthened.peak_load - 1.0
+
+    @property
+    def gain_kind(self) -> str:
+        """"measured", "lower bound", "upper bound" or "not measured" (:func:`gain_kind`)."""
+        return gain_kind(self.unstrengthened.collapsed, self.anchored.collapsed)
+
+    @property
+    def gain_text(self) -> str:
+        """The gain in words: "+65 %", "at least +65 %", ... (:func:`gain_text`)."""
+        return gain_text(self.gain, self.gain_kind)
 
 
 def as_case(case) -> ArchCase:
@@ -155,9 +192,10 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
     r0, r1 = res.unstrengthened, res.anchored
     fig, ax = plt.subplots(figsize=(6, 4))
     for r, label, c in ((r0, "unstrengthened", "C0"), (r1, "anchored", "C3")):
+        bound = "" if r.collapsed else " (lower bound)"
         ax.plot(r.displacements * 1e3, r.loads / 1e3, "o-", ms=3, color=c,
-                label=f"{label}: {r.collapse_load / 1e3:.1f} kN")
-        ax.axhline(r.collapse_load / 1e3, color=c, lw=0.6, ls=":")
+                label=f"{label}: {r.peak_load / 1e3:.1f} kN{bound}")
+        ax.axhline(r.peak_load / 1e3, color=c, lw=0.6, ls=":")
     save_load_curve(fig, ax, f"{case.name}: unstrengthened and anchored", tmp / "curves.png")
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
@@ -172,7 +210,7 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
     a1.set_ylabel("bar force [kN per bar]")
     a2.set_ylabel("bond slip [mm]")
     a2.set_xlabel("distance from the anchor's start [m]")
-    a1.set_title("anchors at the anchored arch's collapse")
+    a1.set_title("anchors at the anchored arch's peak load")
     a1.legend(fontsize=7, ncol=2)
     for a in (a1, a2):
         a.grid(alpha=0.3)
@@ -180,11 +218,18 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
     fig.savefig(tmp / "anchors.png", dpi=120)
     plt.close(fig)
 
+    from masonry_fdem.assessment.assess import status_dict
+
     summary = {
         "case": case.name,
+        "unstrengthened_status": status_dict(r0.status),
+        "anchored_status": status_dict(r1.status),
         "unstrengthened_collapse_load_N": r0.collapse_load,
         "anchored_collapse_load_N": r1.collapse_load,
+        "unstrengthened_peak_load_N": r0.peak_load,
+        "anchored_peak_load_N": r1.peak_load,
         "gain": res.gain,
+        "gain_kind": res.gain_kind,
         "anchor_length_m": res.anchor_length,
         "unstrengthened_resolution_N": r0.resolution,
         "anchored_resolution_N": r1.resolution,
@@ -193,21 +238,34 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
     }
     (tmp / "summary.json").write_text(json.dumps(summary, indent=1))
 
-    kn0, kn1 = r0.collapse_load / 1e3, r1.collapse_load / 1e3
+    def load(r) -> str:
+        kn = r.peak_load / 1e3
+        what = "collapse load" if r.collapsed else "a lower bound"
+        return f"**{kn:.2f} kN** ({kn / 9.80665:.2f} t), {what}"
+
+    def resolution(r) -> str:
+        return f"{r.resolution / 1e3:.2f} kN" if r.collapsed else "–"
+
+    kind = res.gain_kind
+    per_m = (r1.peak_load - r0.peak_load) / 1e3 / max(res.anchor_length, 1e-12)
+    why = {"measured": "both runs passed their peak",
+           "lower bound": "the anchored run gave no collapse load: its load is a lower bound",
+           "upper bound": "the unstrengthened run gave no collapse load: its load is a "
+                          "lower bound",
+           "not measured": "neither run passed its peak"}[kind]
+    gain = (f"Gain: **{res.gain_text}** with {res.anchor_length:.2f} m of anchor "
+            f"({len(r1.anchors)} bars in the model"
+            + (f"; {per_m:.2f} kN per metre" if kind != "not measured" else "")
+            + f"): {why}.")
     lines = [f"# Repair of `{case.name}`: unstrengthened and anchored", "",
              "| | unstrengthened | anchored |", "|---|---|---|",
-             f"| collapse load | **{kn0:.2f} kN** ({kn0 / 9.80665:.2f} t) | "
-             f"**{kn1:.2f} kN** ({kn1 / 9.80665:.2f} t) |",
-             f"| resolution | {r0.resolution / 1e3:.2f} kN | {r1.resolution / 1e3:.2f} kN |",
-             f"| collapse reached | {'yes' if r0.collapsed else 'no'} | "
-             f"{'yes' if r1.collapsed else 'no (limit of the run)'} |",
-             f"| joints open at collapse | {len(r0.hinges_at_collapse)} | "
+             f"| status | {_head(r0)} | {_head(r1)} |",
+             f"| largest load carried | {load(r0)} | {load(r1)} |",
+             f"| resolution | {resolution(r0)} | {resolution(r1)} |",
+             f"| joints open at the peak load | {len(r0.hinges_at_collapse)} | "
              f"{len(r1.hinges_at_collapse)} |",
-             "", f"Gain: **{100 * res.gain:+.0f} %** with {res.anchor_length:.2f} m of anchor "
-             f"({len(r1.anchors)} bars in the model; "
-             f"{(r1.collapse_load - r0.collapse_load) / 1e3 / max(res.anchor_length, 1e-12):.2f}"
-             " kN per metre).", "",
-             "![curves](curves.png)", "", "## Anchors at collapse", "",
+             "", gain, "",
+             "![curves](curves.png)", "", "## Anchors at the peak load", "",
              "| anchor | length [m] | largest bar force [kN] | yield force [kN] | "
              "largest slip [mm] | yielded / ruptured elements |", "|---|---|---|---|---|---|"]
     for a in r1.anchors:
@@ -220,4 +278,9 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
               "The full assessments (hinge sequences, curves as CSV): "
               "[unstrengthened](unstrengthened/report.md), [anchored](anchored/report.md).",
               ""]
-    (tmp / "report.md").write_text("\n".join(lines))
+    (tmp / "report.md").write_text("\n".join(lines), encoding="utf-8")
+
+
+def _head(r: Assessment) -> str:
+    """The status of an assessment without the load: "not converged at 12.50 kN"."""
+    return r.status_line.split(" — ")[0]

@@ -13,7 +13,7 @@ import numpy as np
 from masonry_fdem.io.plot import save_load_curve
 from masonry_fdem.io.rundir import hand_over, partial_folder
 
-__all__ = ["write_run_folder"]
+__all__ = ["read_curve", "status_text", "write_run_folder"]
 
 
 def write_run_folder(case, res, folder: Path, model, inter, anchors, comm) -> None:
@@ -55,10 +55,13 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm) -> No
 def _write_rank0(case, res, tmp: Path, mag: float) -> None:
     import matplotlib
 
+    from masonry_fdem.assessment.assess import status_dict
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    with open(tmp / "curve.csv", "w", newline="") as fh:
+    with open(tmp / "curve.csv", "w", newline="", encoding="utf-8") as fh:
+        fh.write(f"# status: {status_text(res)}\n")
         w = csv.writer(fh)
         w.writerow(["load_N", "displacement_m", "iterations"])
         for row in zip(res.loads, res.displacements, res.iterations, strict=True):
@@ -72,9 +75,14 @@ def _write_rank0(case, res, tmp: Path, mag: float) -> None:
                         f"{e.position[1]:.4f}", f"{e.s:.4f}", f"{e.load:.6g}",
                         f"{e.displacement:.6e}"])
     summary = {k: v for k, v in asdict(res).items()
-               if k not in ("loads", "displacements", "iterations", "folder", "report")}
+               if k not in ("loads", "displacements", "iterations", "folder", "report",
+                            "status")}
+    summary["status"] = status_dict(res.status)
+    summary["status_line"] = status_text(res)
+    summary["collapse_load"] = res.collapse_load
     summary["ratio_to_limit_analysis"] = res.ratio
-    with open(tmp / "summary.json", "w") as fh:
+    summary["peak_load_to_limit_analysis"] = res.bound_ratio
+    with open(tmp / "summary.json", "w", encoding="utf-8") as fh:
         json.dump(summary, fh, indent=1, default=str)
     if case.source is not None and Path(case.source).is_file():
         shutil.copyfile(case.source, tmp / "case.toml")
@@ -104,18 +112,31 @@ def _write_rank0(case, res, tmp: Path, mag: float) -> None:
         ax.annotate("", (x, y), xytext=(x, y + 0.12 * case.arch.span),
                     arrowprops=dict(arrowstyle="->", color="k"))
     ax.set_aspect("equal")
-    ax.set_title("hinges: FDEM at collapse (red circles; numbers: order of opening), "
+    ax.set_title("hinges: FDEM at the peak load (red circles; numbers: order of opening), "
                  "limit analysis (blue ×)", fontsize=8)
     fig.tight_layout()
     fig.savefig(tmp / "hinges.png", dpi=120)
     plt.close(fig)
-    (tmp / "report.md").write_text(_report(case, res, mag))
+    (tmp / "report.md").write_text(_report(case, res, mag), encoding="utf-8")
+
+
+def status_text(res) -> str:
+    """The status line of an :class:`~masonry_fdem.assessment.assess.Assessment` with its
+    detail: "peak passed — collapse load 12.20 kN (the load fell ...)"."""
+    d = res.status.detail
+    return f"{res.status_line} ({d})" if d else res.status_line
 
 
 def _report(case, res, mag: float) -> str:
     a, ld = case.arch, case.loading
-    kn = res.collapse_load / 1e3
-    lines = [f"# Assessment of `{case.name}`", ""]
+    kn = res.peak_load / 1e3
+    lines = [f"# Assessment of `{case.name}`", "", f"**Status: {res.status_line}.**", ""]
+    if res.status.detail:
+        lines += [f"How the run ended: {res.status.detail}.", ""]
+    if not res.collapsed:
+        lines += ["The run gives no collapse load: to find one, drive it past the peak "
+                  "(displacement control, `follow_peak`, more `max_iterations`, a larger "
+                  "`max_displacement` or `max_load`).", ""]
     lines += [
         f"- Arch: {a.kind.value}, span {a.span:g} m, {a.rings} ring(s) of {a.ring_thickness:g} m, "
         f"voussoirs {list(a.voussoirs)}, barrel width {a.width:g} m; {res.cells} triangles.",
@@ -129,13 +150,19 @@ def _report(case, res, mag: float) -> str:
         "",
         "| quantity | value |",
         "|---|---|",
-        f"| FDEM collapse load | **{kn:.2f} kN** ({kn / 9.80665:.2f} t) |",
-        f"| resolution | {res.resolution / 1e3:.2f} kN |",
-        f"| collapse reached | {'yes' if res.collapsed else 'no (limit of the run)'} |",
     ]
+    if res.collapsed:
+        lines += [f"| FDEM collapse load | **{kn:.2f} kN** ({kn / 9.80665:.2f} t) |",
+                  f"| resolution | {res.resolution / 1e3:.2f} kN |"]
+    else:
+        lines.append(f"| FDEM largest load carried (a lower bound, not a collapse load) | "
+                     f"**{kn:.2f} kN** ({kn / 9.80665:.2f} t) |")
     if res.limit_load is not None:
         lines.append(f"| limit analysis (rigid blocks, LP) | {res.limit_load / 1e3:.2f} kN |")
-        lines.append(f"| FDEM / limit analysis | {res.ratio:.3f} |")
+        if res.collapsed:
+            lines.append(f"| FDEM / limit analysis | {res.ratio:.3f} |")
+        else:
+            lines.append(f"| FDEM lower bound / limit analysis | ≥ {res.bound_ratio:.3f} |")
     elif res.limit_status == "infeasible":
         lines.append(f"| limit analysis | infeasible: the rigid blocks, with friction "
                      f"{case.analysis.friction:g} and no bond, find no equilibrium even "
@@ -154,9 +181,24 @@ def _report(case, res, mag: float) -> str:
                          f"{e.position[0]:.3f}, {e.position[1]:.3f} | {e.load / 1e3:.2f} |")
     else:
         lines.append("No joint opened beyond the threshold.")
-    lines += ["", f"Open at collapse: {len(res.hinges_at_collapse)} joint(s). "
+    lines += ["", f"Open at the peak load: {len(res.hinges_at_collapse)} joint(s). "
               f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
               "![hinges](hinges.png)", "",
               f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
               "", "Files: `curve.csv`, `hinges.csv`, `summary.json`.", ""]
     return "\n".join(lines)
+
+
+def read_curve(path: str | Path) -> tuple[str, np.ndarray]:
+    """``(status line, rows)`` of a ``curve.csv``: the text after ``# status:`` and the
+    ``(n, 3)`` array of load [N], displacement [m] and iterations."""
+    status, rows = "", []
+    with open(path, newline="", encoding="utf-8") as fh:
+        for line in fh:
+            if line.startswith("#"):
+                if line.startswith("# status:"):
+                    status = line[len("# status:"):].strip()
+                continue
+            rows.append(line)
+    data = list(csv.reader(rows))[1:]
+    return status, np.array([[float(x) for x in r] for r in data]).reshape(-1, 3)

@@ -24,6 +24,15 @@ drilled from the intrados (:func:`~masonry_fdem.assessment.layouts.inclined_anch
   (``max_load = target``), in order of increasing anchor length, and the search stops
   at the first round in which a layout reaches the target: every layout not yet run is
   longer.
+* **Collapse loads and lower bounds.** Every run ends with a status
+  (:class:`~masonry_fdem.solvers.status.RunStatus`); only *peak passed* gives a collapse
+  load. A layout whose fine run ends otherwise (no equilibrium found, displacement limit,
+  ``max_load`` carried) has a lower bound of its collapse load: it is shown as one and
+  ranked after every layout with a measured collapse load (under ``cheapest``, carrying
+  the target is proof enough). A gain is measured only when the layout's and the
+  unstrengthened arch's runs both give collapse loads (see
+  :func:`~masonry_fdem.assessment.repair.gain_kind`). The coarse level's loads are
+  proxies (mostly lower bounds).
 * **Parallel.** The ranks are split into groups of ``group_size`` (MPI
   sub-communicators); each group runs one layout at a time (``assess`` on its
   sub-communicator); one round runs as many layouts as there are groups.
@@ -52,7 +61,8 @@ import numpy as np
 
 from masonry_fdem.assessment.assess import assess
 from masonry_fdem.assessment.case import AnchorLayout, ArchCase, CaseError, Objective, SearchSpec
-from masonry_fdem.assessment.repair import BASELINE, as_case, free_folder
+from masonry_fdem.assessment.repair import BASELINE, as_case, free_folder, gain_kind
+from masonry_fdem.solvers.status import Status
 
 __all__ = ["RankedLayout", "SearchInterrupted", "SearchResult", "search"]
 
@@ -69,26 +79,49 @@ class RankedLayout:
     Attributes:
         rank: 1 for the best.
         layout: the :class:`~masonry_fdem.assessment.case.AnchorLayout`.
-        collapse_load: its collapse load at the fine level (under ``cheapest``: capped at
-            the target).
-        gain: collapse load − the unstrengthened collapse load.
+        peak_load: the largest load it carried at the fine level (under ``cheapest``:
+            capped at the target): its collapse load if ``status`` gives one, else a
+            lower bound of it.
+        gain: peak load − the unstrengthened peak load (see ``gain_kind``).
         length: Σ bars × length of its anchors (the cost).
         gain_per_metre: gain / length [N/m].
         reaches_target: whether it carries the target (None without a target).
+        status: how its fine run ended (a :class:`~masonry_fdem.solvers.status.Status`
+            value, e.g. "peak passed").
+        gain_kind: "measured", "lower bound", "upper bound" or "not measured"
+            (:func:`~masonry_fdem.assessment.repair.gain_kind`).
     """
 
     rank: int
     layout: AnchorLayout
-    collapse_load: float
+    peak_load: float
     gain: float
     length: float
     gain_per_metre: float
     reaches_target: bool | None
-    collapsed: bool
+    status: str
+    gain_kind: str
 
     @property
     def key(self) -> str:
         return self.layout.key
+
+    @property
+    def collapsed(self) -> bool:
+        """Whether its fine run proved a collapse load."""
+        return Status(self.status).gives_collapse_load
+
+    @property
+    def collapse_load(self) -> float | None:
+        """Its collapse load [N] if its fine run proved one, else None."""
+        return self.peak_load if self.collapsed else None
+
+    @property
+    def load_text(self) -> str:
+        """"5.20 kN (collapse load)" or ">= 5.20 kN (lower bound: load reached)"."""
+        if self.collapsed:
+            return f"{self.peak_load / 1e3:.2f} kN (collapse load)"
+        return f">= {self.peak_load / 1e3:.2f} kN (lower bound: {self.status})"
 
 
 @dataclass
@@ -97,7 +130,9 @@ class SearchResult:
 
     Attributes:
         objective: "gain_per_metre" or "cheapest".
-        baseline: the unstrengthened collapse load at the fine level [N].
+        baseline: the unstrengthened arch's largest load carried at the fine level [N]
+            (its collapse load if ``baseline_status`` gives one, else a lower bound).
+        baseline_status: how that run ended (a Status value).
         ranking: the layouts run at the fine level, best first.
         best: the best layout (None if no layout was run).
         cheapest: the shortest layout of the ranking that reaches the target (None
@@ -105,7 +140,7 @@ class SearchResult:
         rejected: ``(key, reason)`` of layouts that were not run: invalid geometry
             (leaves the structure, overlapping anchors) or a failed run.
         pruned: ``(key, reason)`` of layouts dropped as hopeless.
-        coarse: ``key -> collapse load`` at the coarse level.
+        coarse: ``key -> largest load carried`` at the coarse level (a proxy).
         evaluations: runs made by this call; ``reused``: taken from the journal.
         folder, report: the search folder and ``report.md`` (None if not written).
     """
@@ -118,6 +153,7 @@ class SearchResult:
     rejected: list[tuple[str, str]]
     pruned: list[tuple[str, str]]
     coarse: dict[str, float] = field(default_factory=dict)
+    baseline_status: str = Status.PEAK_PASSED.value
     evaluations: int = 0
     reused: int = 0
     elapsed: float = 0.0
@@ -129,6 +165,18 @@ class SearchResult:
         return self.ranking[0] if self.ranking else None
 
     @property
+    def baseline_collapsed(self) -> bool:
+        """Whether the unstrengthened fine run proved a collapse load."""
+        return Status(self.baseline_status).gives_collapse_load
+
+    @property
+    def baseline_text(self) -> str:
+        """The unstrengthened load in words: a collapse load or a lower bound."""
+        if self.baseline_collapsed:
+            return f"{self.baseline / 1e3:.2f} kN (collapse load)"
+        return f">= {self.baseline / 1e3:.2f} kN (lower bound: {self.baseline_status})"
+
+    @property
     def cheapest(self) -> RankedLayout | None:
         ok = [r for r in self.ranking if r.reaches_target]
         return min(ok, key=lambda r: (r.length, r.key)) if ok else None
@@ -137,7 +185,8 @@ class SearchResult:
 def _fingerprint(case: ArchCase, spec: SearchSpec) -> str:
     parts = [repr(case.arch), repr(sorted(case.material_table.items())), repr(case.mortar),
              repr(case.ring_joint), repr(case.loading), repr(case.damage),
-             repr(replace(case.analysis, output=Path("."))), repr(spec)]
+             repr(replace(case.analysis, output=Path("."))), repr(spec),
+             "journal rows with the run status (v2)"]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
@@ -324,14 +373,14 @@ def search(
                 keep = []
                 for lay, ell in alive:
                     row = load(level, lay)
-                    coarse[lay.key] = row["collapse_load"]
                     if "error" in row:
                         continue
-                    if row["collapse_load"] >= spec.keep_ratio * target:
+                    coarse[lay.key] = row["peak_load"]
+                    if row["peak_load"] >= spec.keep_ratio * target:
                         keep.append((lay, ell))
                     else:
-                        pruned.append((lay.key, f"hopeless: coarse collapse load "
-                                       f"{row['collapse_load'] / 1e3:.2f} kN < "
+                        pruned.append((lay.key, f"hopeless: coarse load "
+                                       f"{row['peak_load'] / 1e3:.2f} kN < "
                                        f"{spec.keep_ratio:g} x target"))
                 alive = keep
             else:
@@ -351,14 +400,14 @@ def search(
                 alive = done
         else:
             run(level, [(None, 0.0)] + alive)
-            b = load(level, None)["collapse_load"]
+            b = _peak(load(level, None))
             scores = []
             for lay, ell in alive:
                 row = load(level, lay)
-                if level == "coarse":
-                    coarse[lay.key] = row["collapse_load"]
                 if "error" not in row:
-                    scores.append(((row["collapse_load"] - b) / ell, lay, ell))
+                    if level == "coarse":
+                        coarse[lay.key] = row["peak_load"]
+                    scores.append(((row["peak_load"] - b) / ell, lay, ell))
             scores.sort(key=lambda t: (-t[0], t[2], t[1].key))
             if not last and scores:
                 top = scores[0][0]
@@ -379,25 +428,36 @@ def search(
             if row is not None and "error" in row:
                 rejected.append((lay.key, f"{level} run failed: {row['error']}"))
                 break
-    baseline = load("fine", None)["collapse_load"]
+    base_row = load("fine", None)
+    baseline = _peak(base_row)
+    base_status = base_row.get("status", Status.NOT_CONVERGED.value)
+    base_collapsed = Status(base_status).gives_collapse_load
     ranking = []
     for lay, ell in alive:
         row = load("fine", lay)
         if "error" in row:
             continue
-        p = row["collapse_load"]
+        p = row["peak_load"]
+        collapsed = Status(row["status"]).gives_collapse_load
         ranking.append(RankedLayout(0, lay, p, p - baseline, ell, (p - baseline) / ell,
                                     None if target is None else _reaches(row, target),
-                                    bool(row["collapsed"])))
-    if spec.objective is Objective.CHEAPEST:
-        ranking.sort(key=lambda r: (not r.reaches_target, r.length if r.reaches_target
-                                    else -r.collapse_load, r.key))
-    else:
-        ranking.sort(key=lambda r: (-r.gain_per_metre, r.length, r.key))
+                                    row["status"], gain_kind(base_collapsed, collapsed)))
+
+    def order(r: RankedLayout) -> tuple:
+        # a lower bound never outranks a measured collapse load (carrying the target
+        # under "cheapest" is proof enough)
+        if spec.objective is Objective.CHEAPEST:
+            if r.reaches_target:
+                return (0, r.length, False, 0.0, r.key)
+            return (1, 0.0, not r.collapsed, -r.peak_load, r.key)
+        return (not r.collapsed, -r.gain_per_metre, r.length, r.key)
+
+    ranking.sort(key=order)
     for i, r in enumerate(ranking):
         r.rank = i + 1
     result = SearchResult(case.name, spec.objective.value, target, baseline, ranking,
-                          rejected, pruned, coarse, stats["new"], stats["reused"])
+                          rejected, pruned, coarse, base_status, stats["new"],
+                          stats["reused"])
     result.elapsed = time.perf_counter() - t0
     sub.Free()
     if write:
@@ -410,7 +470,15 @@ def search(
 
 def _reaches(row: dict, target: float | None) -> bool:
     return target is not None and "error" not in row and \
-        row["collapse_load"] >= target * (1.0 - 1e-9)
+        row["peak_load"] >= target * (1.0 - 1e-9)
+
+
+def _peak(row: dict) -> float:
+    """The largest load carried of a journal row (the unstrengthened run must not fail)."""
+    if "error" in row:
+        raise RuntimeError(f"the unstrengthened arch's {row['level']} run failed: "
+                           f"{row['error']}")
+    return row["peak_load"]
 
 
 def _evaluate(base: ArchCase, lay: AnchorLayout | None, ell: float, spec: SearchSpec,
@@ -423,8 +491,9 @@ def _evaluate(base: ArchCase, lay: AnchorLayout | None, ell: float, spec: Search
         r = assess(case, comm=sub, write=False, progress=False)
     except (RuntimeError, ValueError) as exc:
         return {"level": level, "key": key, "error": str(exc), "length": ell}
-    row = {"level": level, "key": key, "collapse_load": float(r.collapse_load),
-           "resolution": float(r.resolution), "collapsed": bool(r.collapsed),
+    row = {"level": level, "key": key, "status": r.status.status.value,
+           "peak_load": float(r.peak_load), "collapse_load": r.collapse_load,
+           "detail": r.status.detail, "resolution": float(r.resolution),
            "length": ell, "steps": len(r.loads), "elapsed": time.perf_counter() - t}
     if r.anchors:
         row["force_max"] = max(a["force_max"] for a in r.anchors)
@@ -434,7 +503,7 @@ def _evaluate(base: ArchCase, lay: AnchorLayout | None, ell: float, spec: Search
 
 def _atomic_write(path: Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
+    tmp.write_text(text, encoding="utf-8")
     tmp.replace(path)
 
 
@@ -449,21 +518,25 @@ def _write_search(case: ArchCase, spec: SearchSpec, res: SearchResult, folder: P
     buf = io.StringIO()
     w = csv.writer(buf)
     w.writerow(["rank", "layout", "anchors", "positions", "inclination_deg", "length_m",
-                "prestress_N", "anchor_metres", "collapse_load_N", "gain_N",
-                "gain_per_metre_N_per_m", "reaches_target", "coarse_collapse_load_N"])
+                "prestress_N", "anchor_metres", "status", "collapse_load_N", "peak_load_N",
+                "gain_N", "gain_kind", "gain_per_metre_N_per_m", "reaches_target",
+                "coarse_load_N"])
     for r in res.ranking:
         lay = r.layout
         w.writerow([r.rank, r.key, len(lay.positions), " ".join(f"{p:g}" for p in lay.positions),
                     f"{lay.inclination:g}", "through" if lay.length is None else f"{lay.length:g}",
-                    f"{lay.prestress:g}", f"{r.length:.4f}", f"{r.collapse_load:.6g}",
-                    f"{r.gain:.6g}", f"{r.gain_per_metre:.6g}",
+                    f"{lay.prestress:g}", f"{r.length:.4f}", r.status,
+                    "" if r.collapse_load is None else f"{r.collapse_load:.6g}",
+                    f"{r.peak_load:.6g}", f"{r.gain:.6g}", r.gain_kind,
+                    f"{r.gain_per_metre:.6g}",
                     "" if r.reaches_target is None else r.reaches_target,
                     f"{res.coarse[r.key]:.6g}" if r.key in res.coarse else ""])
     _atomic_write(folder / "ranking.csv", buf.getvalue())
     summary = {k: v for k, v in asdict(res).items()
                if k not in ("ranking", "folder", "report")}
-    summary["ranking"] = [{"rank": r.rank, "key": r.key, "collapse_load": r.collapse_load,
-                           "gain": r.gain, "length": r.length,
+    summary["ranking"] = [{"rank": r.rank, "key": r.key, "status": r.status,
+                           "collapse_load": r.collapse_load, "peak_load": r.peak_load,
+                           "gain": r.gain, "gain_kind": r.gain_kind, "length": r.length,
                            "gain_per_metre": r.gain_per_metre,
                            "reaches_target": r.reaches_target} for r in res.ranking]
     summary["best"] = res.best.key if res.best else None
@@ -482,7 +555,8 @@ def _write_search(case: ArchCase, spec: SearchSpec, res: SearchResult, folder: P
         if r is not None:
             for a in r.layout.spec(spec).build(case.arch):
                 ax.plot(a.points[:, 0], a.points[:, 1], "-", color="C3", lw=2.2)
-            ax.set_title(f"#{r.rank}: {r.collapse_load / 1e3:.1f} kN, {r.length:.2f} m,\n"
+            ax.set_title(f"#{r.rank}: {'' if r.collapsed else '>= '}"
+                         f"{r.peak_load / 1e3:.1f} kN, {r.length:.2f} m,\n"
                          f"{r.gain_per_metre / 1e3:.1f} kN/m", fontsize=8)
         for x, y in case.load_points():
             ax.annotate("", (x, y), xytext=(x, y + 0.15 * case.arch.span),
@@ -494,17 +568,21 @@ def _write_search(case: ArchCase, spec: SearchSpec, res: SearchResult, folder: P
     plt.close(fig)
 
     fig, ax = plt.subplots(figsize=(5.5, 4))
-    if res.ranking:
-        ax.plot([r.length for r in res.ranking], [r.collapse_load / 1e3 for r in res.ranking],
-                "o", color="C3", label="fine level")
-        for r in res.ranking[:4]:
-            ax.annotate(f"#{r.rank}", (r.length, r.collapse_load / 1e3), fontsize=8,
-                        xytext=(3, 3), textcoords="offset points")
-    ax.axhline(res.baseline / 1e3, color="C0", ls="--", label="unstrengthened")
+    for measured, mark, label in ((True, "o", "collapse load"),
+                                  (False, "^", "lower bound (no collapse load)")):
+        rr = [r for r in res.ranking if r.collapsed is measured]
+        if rr:
+            ax.plot([r.length for r in rr], [r.peak_load / 1e3 for r in rr], mark,
+                    color="C3", mfc="C3" if measured else "none", label=label)
+    for r in res.ranking[:4]:
+        ax.annotate(f"#{r.rank}", (r.length, r.peak_load / 1e3), fontsize=8,
+                    xytext=(3, 3), textcoords="offset points")
+    ax.axhline(res.baseline / 1e3, color="C0", ls="--", label="unstrengthened" + (
+        "" if res.baseline_collapsed else " (lower bound)"))
     if res.target:
         ax.axhline(res.target / 1e3, color="k", ls=":", label="target")
     ax.set_xlabel("anchor installed [m]")
-    ax.set_ylabel("collapse load [kN]")
+    ax.set_ylabel("largest load carried [kN]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -514,23 +592,40 @@ def _write_search(case: ArchCase, spec: SearchSpec, res: SearchResult, folder: P
     goal = ("largest collapse-load gain per metre of anchor" if res.objective ==
             "gain_per_metre" else f"cheapest layout carrying {res.target / 1e3:.2f} kN")
     lines = [f"# Anchor layout search for `{case.name}`", "",
-             f"Objective: {goal}. Unstrengthened collapse load: "
-             f"**{res.baseline / 1e3:.2f} kN**. Candidates: {len(spec.candidates())}; "
+             f"Objective: {goal}. Unstrengthened: **{res.baseline_text}**. "
+             f"Candidates: {len(spec.candidates())}; "
              f"rejected {len(res.rejected)}; dropped as hopeless {len(res.pruned)}; "
              f"ranked {len(res.ranking)}. Runs: {res.evaluations} in this session, "
              f"{res.reused} from the journal.", ""]
     if res.best:
-        lines.append(f"Best: **{res.best.key}**: {res.best.collapse_load / 1e3:.2f} kN, "
-                     f"{res.best.length:.2f} m of anchor.")
+        lines.append(f"Best: **{res.best.key}**: {res.best.load_text}, "
+                     f"{res.best.length:.2f} m of anchor; gain {res.best.gain_kind}.")
+    bounds = sum(not r.collapsed for r in res.ranking)
+    notes = []
+    if bounds == len(res.ranking) > 0:
+        notes.append("No layout's run reached a collapse load (\"≥\": lower bounds).")
+    elif bounds:
+        after = ("those that carry the target reach it all the same" if res.objective ==
+                 "cheapest" else "they rank after every measured one")
+        notes.append(f"{bounds} of the {len(res.ranking)} layouts ran without reaching a "
+                     f"collapse load (\"≥\": a lower bound); {after}.")
+    if not res.baseline_collapsed:
+        notes.append("The unstrengthened run gave a lower bound only: no gain below is a "
+                     "measured gain.")
+    if notes:
+        lines.append(" ".join(notes))
     if res.target:
         ch = res.cheapest
         lines.append(f"Cheapest reaching {res.target / 1e3:.2f} kN: " +
                      (f"**{ch.key}** ({ch.length:.2f} m)." if ch else "none of those run."))
-    lines += ["", "| rank | layout | anchor [m] | collapse load [kN] | gain [kN] | "
-              "gain per metre [kN/m] |", "|---|---|---|---|---|---|"]
+    lines += ["", "| rank | layout | anchor [m] | status | load [kN] | gain [kN] | "
+              "gain per metre [kN/m] |", "|---|---|---|---|---|---|---|"]
     for r in res.ranking:
-        lines.append(f"| {r.rank} | {r.key} | {r.length:.2f} | {r.collapse_load / 1e3:.2f} | "
-                     f"{r.gain / 1e3:+.2f} | {r.gain_per_metre / 1e3:.2f} |")
+        ge = "" if r.collapsed else "≥ "
+        g = "" if r.gain_kind == "measured" else f" ({r.gain_kind})"
+        lines.append(f"| {r.rank} | {r.key} | {r.length:.2f} | {r.status} | "
+                     f"{ge}{r.peak_load / 1e3:.2f} | {r.gain / 1e3:+.2f}{g} | "
+                     f"{r.gain_per_metre / 1e3:.2f} |")
     lines += ["", "![best layouts](best_layouts.png)", "", "![load vs length]"
               "(load_vs_length.png)", ""]
     if res.rejected:

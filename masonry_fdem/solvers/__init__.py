@@ -1,7 +1,10 @@
-"""Time integration: explicit central difference and dynamic relaxation."""
+"""Time integration: explicit central difference, dynamic relaxation, the static Newton
+solver on PETSc SNES; the status of a quasi-static run."""
 
 from masonry_fdem.solvers.dynamic_relaxation import CollapseResult, DRResult, DynamicRelaxation
 from masonry_fdem.solvers.explicit import EnergyAccount, ExplicitSolver, UnstableTimeStepError
+from masonry_fdem.solvers.static import NewtonResult, StaticRun, StaticSolver
+from masonry_fdem.solvers.status import RunStatus, Status
 
 __all__ = [
     "CollapseResult",
@@ -9,6 +12,11 @@ __all__ = [
     "DynamicRelaxation",
     "EnergyAccount",
     "ExplicitSolver",
+    "NewtonResult",
+    "RunStatus",
+    "StaticRun",
+    "StaticSolver",
+    "Status",
     "UnstableTimeStepError",
 ]
 

@@ -31,7 +31,10 @@ the row sums of its stiffness (the interactions' ``add_rowsum``). The replicated
 velocity quotient is taken over the block dofs, which carry the structure's lowest mode.
 
 Load increments scale the live loads; an increment that does not converge within
-``max_iter`` iterations is reported as not in equilibrium (collapse in a load-to-collapse run).
+``max_iter`` iterations is reported as not in equilibrium. That is not proof that no
+equilibrium exists (near a peak the structure is soft and DR stalls): a load-to-collapse
+run that stalls ends *not converged* (:class:`~masonry_fdem.solvers.status.RunStatus`), its
+last converged load a lower bound of the collapse load, never the collapse load.
 History (material state of the blocks, every interaction's) is committed only when an
 increment converges; a failed increment is undone by :meth:`DynamicRelaxation.restore` of
 the :meth:`DynamicRelaxation.snapshot` taken before it (every interaction's full state).
@@ -49,8 +52,9 @@ import numpy as np
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
 from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescribe_displacements
+from masonry_fdem.solvers.status import RunStatus, Status
 
-__all__ = ["DynamicRelaxation", "DRResult"]
+__all__ = ["CollapseResult", "DynamicRelaxation", "DRResult"]
 
 log = logging.getLogger(__name__)
 
@@ -83,17 +87,31 @@ class CollapseResult:
     """Outcome of :meth:`DynamicRelaxation.load_to_collapse`.
 
     Attributes:
-        load_factor: the last load factor with equilibrium (the collapse load factor,
-            within ``resolution`` above it, if ``collapsed``).
-        resolution: the increment that failed last.
-        collapsed: False if ``max_load`` was carried.
+        status: how the run ended (:class:`~masonry_fdem.solvers.status.RunStatus`):
+            *load reached* when ``max_load`` was carried, else *not converged* at the load
+            factor tried last (dynamic relaxation cannot tell a stall from a collapse:
+            its ``collapse_load`` is None and the last converged factor only a lower bound).
+        load_factor: the last load factor with equilibrium.
+        resolution: the increment that failed last (the gap between ``load_factor`` and
+            the factor where no equilibrium was found).
         history: the converged load factors, in order.
     """
 
+    status: RunStatus
     load_factor: float
     resolution: float
-    collapsed: bool
     history: list[float]
+
+    @property
+    def collapsed(self) -> bool:
+        """Whether the run proved a collapse load (never, for dynamic relaxation's load
+        control: a stall is not a collapse)."""
+        return self.status.status.gives_collapse_load
+
+    @property
+    def collapse_load_factor(self) -> float | None:
+        """The collapse load factor if the run proved one, else None."""
+        return self.status.collapse_load
 
 
 class _Set:
@@ -328,16 +346,19 @@ class DynamicRelaxation:
         refinements: int = 4,
         callback: Callable[[DRResult], None] | None = None,
     ) -> CollapseResult:
-        """Raise the live-load factor in increments until equilibrium is lost.
+        """Raise the live-load factor in increments until no equilibrium is found.
 
         From the equilibrium at ``start``, the load factor grows by ``increment``; when an
         increment finds no equilibrium (``max_iter`` reached), the state before it is
-        restored and the increment halved, up to ``refinements`` times. The collapse load
-        factor lies between the last converged factor and that plus the last increment
-        tried (its resolution).
+        restored and the increment halved, up to ``refinements`` times.
+
+        Status (logged on rank 0): *load reached* if ``max_load`` is carried; otherwise
+        *not converged* at the factor tried last, after all refinements. The last
+        converged factor is then a lower bound of the collapse load factor (the stall
+        may lie below the peak); ``resolution`` is the increment that failed.
 
         Returns:
-            :class:`CollapseResult` with the converged factors in order.
+            :class:`CollapseResult` with the status and the converged factors in order.
         """
         if not increment > 0:
             raise ValueError(f"increment must be > 0, got {increment}")
@@ -359,10 +380,23 @@ class DynamicRelaxation:
                 continue
             self.restore(snap)
             if halvings == refinements:
-                return CollapseResult(level, trial - level, True, converged)
+                detail = (f"dynamic relaxation: no equilibrium within {self.max_iter} "
+                          f"iterations (|r|/|f| = {res.relative_residual:.2e}) after "
+                          f"{refinements} halving(s) of the increment")
+                return self._finish(CollapseResult(
+                    RunStatus(Status.NOT_CONVERGED, level, level,
+                              trial, detail), level, trial - level, converged))
             halvings += 1
             step *= 0.5
-        return CollapseResult(level, step, False, converged)
+        return self._finish(CollapseResult(
+            RunStatus(Status.LOAD_REACHED, level, level, None,
+                      f"carried the largest load factor asked for, {level:.6g}"),
+            level, step, converged))
+
+    def _finish(self, result: CollapseResult) -> CollapseResult:
+        if self.model.comm.rank == 0:
+            log.info("DR load to collapse: %s", result.status.describe())
+        return result
 
     def load_steps(
         self,
