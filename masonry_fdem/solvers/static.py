@@ -49,7 +49,7 @@ from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tange
 from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescribe_displacements
 from masonry_fdem.solvers.status import RunStatus, Status
 
-__all__ = ["StaticSolver", "NewtonResult", "StaticRun"]
+__all__ = ["StaticSolver", "NewtonResult", "PathPoint", "StaticRun"]
 
 log = logging.getLogger(__name__)
 
@@ -92,11 +92,14 @@ class NewtonResult:
 
 @dataclass
 class StaticRun:
-    """Outcome of :meth:`StaticSolver.load_to_collapse`.
+    """Outcome of :meth:`StaticSolver.load_to_collapse` or :meth:`StaticSolver.follow`.
 
     Attributes:
         status: the run's :class:`~masonry_fdem.solvers.status.RunStatus`.
         load_factors: the converged load factors, in order (the start first).
+        loads, displacements: (:meth:`~StaticSolver.follow`) the load (λ, or a
+            platen's reaction [N]) and the displacement measure [m] of each converged
+            step, from the start.
         iterations: Newton iterations of each converged increment.
         results: every increment tried (converged or not).
     """
@@ -105,11 +108,24 @@ class StaticRun:
     load_factors: list[float] = field(default_factory=list)
     iterations: list[int] = field(default_factory=list)
     results: list[NewtonResult] = field(default_factory=list)
+    loads: list[float] = field(default_factory=list)
+    displacements: list[float] = field(default_factory=list)
 
     @property
     def collapse_load_factor(self) -> float | None:
         """The collapse load factor if the run proved one (else None)."""
         return self.status.collapse_load
+
+
+@dataclass(frozen=True)
+class PathPoint:
+    """A converged step of :meth:`StaticSolver.follow`: the load (λ or a reaction [N]),
+    the displacement measure [m], the live-load factor and the Newton iterations."""
+
+    load: float
+    displacement: float
+    load_factor: float
+    iterations: int
 
 
 class _Set:
@@ -228,6 +244,8 @@ class StaticSolver:
         self._load_factor = 0.0
         #: the load factor of the committed state
         self.load_factor = 0.0
+        #: the factor on the dead loads (1 once :meth:`settle` has applied them)
+        self.dead_factor = 1.0
         self._ref = 1.0
         self._history: list[float] = []
         self.results: list[NewtonResult] = []
@@ -324,6 +342,9 @@ class StaticSolver:
                    or not np.array_equal(self._pattern[0], r)
                    or not np.array_equal(self._pattern[1], c))
         if self.comm.allreduce(changed, op=MPI.LOR):  # collective: every rank or none
+            # release the factorization of the old pattern before the matrix is rebuilt
+            # (MUMPS in parallel otherwise writes through stale structures)
+            self.snes.getKSP().getPC().reset()
             self.J.setPreallocationCOO(r, c)
             self.J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
             self._pattern = (r.copy(), c.copy())
@@ -378,11 +399,10 @@ class StaticSolver:
             displacement: ``{prescription name: (ux, uy)}`` [m]: total displacements of
                 the prescribed dofs of that prescription (``None``: leave as it is).
         """
-        m = self.model
         if displacement:
             self.prescribe(displacement)
         self._load_factor = float(load_factor)
-        m.external_force(load_factor, out=self.f_ext)
+        self._set_load(load_factor)
         self._gather(self.x.array)
         self._forces()
         self._ref = self._reference()
@@ -453,6 +473,43 @@ class StaticSolver:
         return out
 
     # ------------------------------------------------------------------ load stepping
+    def settle(self, steps: int = 8, *, min_fraction: float = 1.0 / 256.0, grow: float = 1.5,
+               easy_iterations: int = 5) -> RunStatus:
+        """Apply the dead loads (self-weight) from zero in increments, from the
+        committed state, at the current live-load factor: a structure of blocks that
+        only touch at the start has no contact stiffness yet, and a full first Newton
+        step overshoots (the stiffer the contact, the worse). An increment that fails is
+        undone and halved, one that converges in at most ``easy_iterations`` lets the
+        next grow ``grow`` times; below ``min_fraction`` the run stops.
+
+        Returns:
+            *load reached* with the dead loads in full, or *not converged* at the dead-
+            load fraction that failed (``at``; the structure then holds the fraction
+            committed last, :attr:`dead_factor`).
+        """
+        if steps < 1:
+            raise ValueError(f"steps must be >= 1, got {steps}")
+        done, df = 0.0, 1.0 / steps
+        self.dead_factor = 0.0
+        lam = self.load_factor
+        while done < 1.0 - 1e-12:
+            trial = min(1.0, done + df)
+            self.dead_factor = trial
+            res = self.solve(lam)
+            if res.converged:
+                done = trial
+                if res.iterations <= easy_iterations:
+                    df *= grow
+                continue
+            self.dead_factor = done
+            if df <= min_fraction * (1 + 1e-12):
+                return RunStatus(Status.NOT_CONVERGED, lam, lam, trial,
+                                 f"dead loads: Newton did not converge ({res.reason}) at "
+                                 f"{trial:.4g} of them")
+            df = max(0.5 * df, min_fraction)
+        self.dead_factor = 1.0
+        return RunStatus(Status.LOAD_REACHED, lam, lam, None, "dead loads applied")
+
     def advance(
         self,
         load_factor: float | None = None,
@@ -606,6 +663,340 @@ class StaticSolver:
             step = max(0.5 * step, dmin)
         run.status = RunStatus(Status.LOAD_REACHED, level, max(run.load_factors), None,
                                f"carried {level:.6g}")
+        return run
+
+    # ------------------------------------------------------------------ path following
+    def _solve_linear(self, rhs: np.ndarray, out: np.ndarray) -> bool:
+        """out = K⁻¹ rhs with the assembled tangent (local arrays; collective). False if
+        the linear solver failed (a zero pivot: a singular tangent)."""
+        b = self.F.duplicate()
+        x = self.x.duplicate()
+        b.array[:] = rhs
+        ksp = self.snes.getKSP()
+        ksp.setOperators(self.J, self.J)
+        try:
+            ksp.solve(b, x)
+        except PETSc.Error:
+            return False
+        ok = ksp.getConvergedReason() > 0 and np.all(np.isfinite(x.array))
+        out[:] = x.array
+        b.destroy()
+        x.destroy()
+        return bool(self.comm.allreduce(ok, op=MPI.LAND))
+
+    def _set_load(self, lam: float) -> None:
+        m = self.model
+        np.multiply(m.f_live, lam, out=self.f_ext)
+        if self.dead_factor == 1.0:
+            self.f_ext += m.f_dead
+        else:
+            self.f_ext += self.dead_factor * m.f_dead
+        self._load_factor = float(lam)
+
+    def _free_norm(self, v: np.ndarray) -> float:
+        return math.sqrt(self.comm.allreduce(float(np.dot(v, v))))
+
+    def _live_vector(self) -> np.ndarray:
+        """The live load on the free dofs, as a local PETSc array (zero elsewhere)."""
+        q = np.zeros(self.n_local)
+        b = self.sets[0]
+        q[b.sl] = self.model.f_live
+        q[b.sl][b.presc != 0] = 0.0
+        return q
+
+    def _arc_increment(self, ds: float, a: np.ndarray, q: np.ndarray,
+                       max_backtracks: int = 6) -> tuple[NewtonResult, float]:
+        """One increment of indirect displacement control from the committed state:
+        find (u, λ) with r(u, λ) = 0 and a·(u − u_c) = ds (the bordered Newton method:
+        two solves with the same tangent per iteration). On convergence the state is
+        committed; otherwise restored. Returns (result, λ)."""
+        lam_c = self.load_factor
+        xc = np.zeros(self.n_local)
+        self._gather(xc)
+        x = xc.copy()
+        lam = lam_c
+        r = np.zeros(self.n_local)
+        dq = np.zeros(self.n_local)
+        dr = np.zeros(self.n_local)
+
+        def dot(u, v):
+            return self.comm.allreduce(float(np.dot(u, v)))
+
+        def evaluate(xa, lam_):
+            self._scatter(xa)
+            self._set_load(lam_)
+            self._forces()
+            self._x_at_forces[:] = xa
+            self._residual_into(r)
+            return self._free_norm(r)
+
+        history: list[float] = []
+        converged, its, reason = False, 0, "DIVERGED_MAX_IT"
+        # predictor: the tangent at the committed state along the live load
+        rn = evaluate(x, lam)
+        self.assemble_tangent()
+        if not self._solve_linear(q, dq):
+            reason = "DIVERGED_LINEAR_SOLVE"
+        else:
+            adq = dot(a, dq)
+            if adq == 0.0 or not math.isfinite(adq):
+                reason = "DIVERGED_LINEAR_SOLVE"
+            else:
+                dlam = ds / adq
+                x += dlam * dq
+                lam += dlam
+                rn = evaluate(x, lam)
+                ref = self._reference()
+                history.append(rn)
+                while True:
+                    c = dot(a, x - xc) - ds
+                    if rn <= self.rtol * ref and abs(c) <= 1e-8 * abs(ds):
+                        converged, reason = True, "CONVERGED_FNORM_ABS"
+                        break
+                    if its >= self.max_it or not math.isfinite(rn):
+                        reason = "DIVERGED_MAX_IT" if math.isfinite(rn) else "DIVERGED_FNORM_NAN"
+                        break
+                    its += 1
+                    self.assemble_tangent()
+                    if not (self._solve_linear(-r, dr) and self._solve_linear(q, dq)):
+                        reason = "DIVERGED_LINEAR_SOLVE"
+                        break
+                    adq = dot(a, dq)
+                    if adq == 0.0 or not math.isfinite(adq):
+                        reason = "DIVERGED_LINEAR_SOLVE"
+                        break
+                    dlam = -(c + dot(a, dr)) / adq
+                    du = dr + dlam * dq
+                    # backtracking on the residual norm (the constraint is linear: any
+                    # fraction of the step keeps a·Δu on its way to ds)
+                    alpha = 1.0
+                    x0, lam0, rn0 = x.copy(), lam, rn
+                    for _ in range(max_backtracks + 1):
+                        x = x0 + alpha * du
+                        lam = lam0 + alpha * dlam
+                        rn = evaluate(x, lam)
+                        if rn < rn0 or alpha < 0.5 ** max_backtracks:
+                            break
+                        alpha *= 0.5
+                    ref = self._reference()
+                    history.append(rn)
+        ref = self._reference() if converged else max(self._ref, 1.0)
+        if converged:
+            self.commit()
+            self.load_factor = float(lam)
+        else:
+            self._set_load(lam_c)
+            self.restore()
+            lam = lam_c
+        res = NewtonResult(float(lam), converged, its, rn, ref, reason, tuple(history))
+        self.results.append(res)
+        if self.comm.rank == 0:
+            log.info("arc length: Δs %.4g, load factor %.6g %s in %d iterations (%s)", ds,
+                     lam, "converged" if converged else "NOT converged", its, reason)
+        return res, lam
+
+    def follow(
+        self,
+        increment: float,
+        *,
+        control: str = "arc-length",
+        weights: np.ndarray | None = None,
+        prescription: str | None = None,
+        component: int = 1,
+        max_displacement: float = math.inf,
+        max_load: float = math.inf,
+        max_steps: int = 400,
+        min_increment: float | None = None,
+        max_increment: float | None = None,
+        grow: float = 1.5,
+        easy_iterations: int = 6,
+        peak_drop: float = 0.05,
+        stop_drop: float = 0.5,
+        mechanism_ratio: float = 1e-2,
+        callback: Callable[[PathPoint], None] | None = None,
+    ) -> StaticRun:
+        """Trace the load–displacement path from the committed state up to and past the
+        peak load.
+
+        Two controls:
+
+        * ``"arc-length"`` (indirect displacement control, de Borst 1987; the form
+          Lourenço & Rots used for masonry): the live-load factor λ is an unknown and
+          each increment moves a generalized displacement ``w·u`` by ``increment`` [m],
+          solved by the bordered Newton method (two solves with one factorization per
+          iteration). ``weights`` (a local array over the block dofs) default to the
+          live load scaled to unit sum, ``w·u`` being then the displacement of the load
+          along its own direction (downward for a downward load). A displacement
+          measure passes limit points where load control stops, and λ goes down the
+          descending branch by itself (snap-backs in the measure are not followed;
+          pick weights that grow monotonically, such as the loaded point's
+          displacement or a crack opening);
+        * ``"displacement"``: prescription ``prescription``'s ``component`` is driven by
+          ``increment`` [m] per step at a fixed live-load factor (a platen); the load is
+          its reaction along the drive, [N].
+
+        Increments: one converging in at most ``easy_iterations`` lets the next grow
+        ``grow`` times (up to ``max_increment``, default 8 × ``increment``); one that
+        fails is undone and halved, down to ``min_increment`` (default
+        ``increment``/64).
+
+        Status (the loads: λ for arc length, the reaction [N] for displacement
+        control): *peak passed* once the load has fallen ``stop_drop`` below its
+        maximum (the run then stops), or at the end of the run if it fell at least
+        ``peak_drop`` below it; else at ``max_displacement`` [m] (of the measure) a
+        *mechanism* if the current stiffness parameter (Bergan et al. 1978) of the last
+        step is below ``mechanism_ratio`` (the load no longer rising), *displacement
+        limit reached* otherwise; *load reached* once the load reaches ``max_load``
+        (the run stops there: the structure carries it); *not converged* if an
+        increment fails at the smallest size (or ``max_steps`` is reached) before the
+        peak was passed.
+
+        Returns:
+            :class:`StaticRun` with ``loads`` and ``displacements`` (the measure) of
+            every converged step, the start first.
+        """
+        if not increment > 0:
+            raise ValueError(f"increment must be > 0, got {increment}")
+        if control not in ("arc-length", "displacement"):
+            raise ValueError(f"control must be 'arc-length' or 'displacement', got {control!r}")
+        dmin = increment / 64.0 if min_increment is None else float(min_increment)
+        dmax = 8.0 * increment if max_increment is None else float(max_increment)
+        if not 0 < dmin <= increment <= dmax:
+            raise ValueError("need 0 < min_increment <= increment <= max_increment")
+        if not 0 < peak_drop <= stop_drop < 1:
+            raise ValueError("need 0 < peak_drop <= stop_drop < 1")
+
+        def dot(u, v):
+            return self.comm.allreduce(float(np.dot(u, v)))
+
+        if control == "arc-length":
+            q = self._live_vector()
+            a = np.zeros(self.n_local)
+            b = self.sets[0]
+            if weights is None:
+                w = np.where(b.presc != 0, 0.0, self.model.f_live)
+                tot = self.comm.allreduce(float(np.abs(w).sum()))
+                if tot == 0.0:
+                    raise ValueError("arc length needs a live load (none on the free dofs)")
+                a[b.sl] = w / tot
+            else:
+                w = np.asarray(weights, dtype=float)
+                if w.shape != b.u.shape:
+                    raise ValueError(f"weights must have the block dofs' shape {b.u.shape}")
+                a[b.sl] = w
+            if dot(a, a) == 0.0:
+                raise ValueError("the weights of the displacement measure are all zero")
+
+            def measure() -> float:
+                xa = np.zeros(self.n_local)
+                self._gather(xa)
+                return dot(a, xa)
+
+            def load() -> float:
+                return self.load_factor
+        else:
+            if prescription is None:
+                raise ValueError("displacement control needs a prescription name")
+            if component not in (0, 1):
+                raise ValueError(f"component must be 0 or 1, got {component}")
+            sign = 1.0  # drive along +component; the load is the reaction along it
+            names = {p.name for p in self.model.prescriptions}
+            for s in self.sets[1:]:
+                names |= set(s.prescriptions)
+            if prescription not in names:
+                raise ValueError(f"no prescription named {prescription!r}")
+            d0 = self._prescribed_value(prescription, component)
+
+            def measure() -> float:
+                return sign * (self._prescribed_value(prescription, component) - d0)
+
+            def load() -> float:
+                return -sign * float(self.reactions()[prescription][component])
+
+        run = StaticRun(RunStatus(Status.NOT_CONVERGED, load(), load()))
+        lam0 = load()
+        d_start = measure()
+        run.loads.append(lam0)
+        run.displacements.append(0.0)
+        run.load_factors.append(self.load_factor)
+        run.iterations.append(0)
+        peak, k0, k_last = lam0, None, None
+        step = float(increment)
+        status = None
+        steps = 0
+        while steps < max_steps:
+            d_now = run.displacements[-1]
+            ds = min(step, max_displacement - d_now) if math.isfinite(max_displacement) else step
+            if ds <= 1e-12 * max(abs(max_displacement), 1.0):
+                break
+            if control == "arc-length":
+                res, _ = self._arc_increment(ds, a, q)
+            else:
+                target = d0 + sign * (d_now + ds)
+                disp = {prescription: (target, None) if component == 0 else (None, target)}
+                res = self.solve(self.load_factor, displacement=disp)
+            run.results.append(res)
+            if not res.converged:
+                if step <= dmin * (1 + 1e-12):
+                    lam = run.loads[-1]
+                    detail = (f"Newton did not converge ({res.reason}) at displacement "
+                              f"{d_now + ds:.4g} m after cut-backs to {dmin:.3g} m")
+                    fell = peak > 0 and lam <= (1.0 - peak_drop) * peak
+                    status = RunStatus(Status.PEAK_PASSED if fell else Status.NOT_CONVERGED,
+                                       lam, peak, None if fell else d_now + ds,
+                                       ("the load had fallen " f"{100 * (1 - lam / peak):.0f} % "
+                                        "below its peak; then " if fell else "") + detail)
+                    break
+                step = max(0.5 * step, dmin)
+                continue
+            steps += 1
+            d = measure() - d_start
+            lam = load()
+            dd, dl = d - run.displacements[-1], lam - run.loads[-1]
+            k = dl / dd if dd != 0 else math.inf
+            if k0 is None and math.isfinite(k) and k > 0:
+                k0 = k
+            k_last = k
+            run.loads.append(lam)
+            run.displacements.append(d)
+            run.load_factors.append(self.load_factor)
+            run.iterations.append(res.iterations)
+            peak = max(peak, lam)
+            if callback is not None:
+                callback(PathPoint(lam, d, self.load_factor, res.iterations))
+            if lam >= max_load:
+                status = RunStatus(Status.LOAD_REACHED, lam, peak, None,
+                                   f"carried {lam:.6g} >= max_load = {max_load:.6g}")
+                break
+            if peak > 0 and lam <= (1.0 - stop_drop) * peak:
+                status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
+                                   f"the load fell to {100 * lam / peak:.0f} % of its peak "
+                                   f"at displacement {d:.4g} m")
+                break
+            if res.iterations <= easy_iterations:
+                step = min(step * grow, dmax)
+        if status is None:
+            lam = run.loads[-1]
+            d = run.displacements[-1]
+            sp = k_last / k0 if (k0 and k_last is not None) else math.nan
+            if peak > 0 and lam <= (1.0 - peak_drop) * peak:
+                status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
+                                   f"the load fell to {100 * lam / peak:.0f} % of its peak by "
+                                   f"displacement {d:.4g} m")
+            elif steps >= max_steps:
+                status = RunStatus(Status.NOT_CONVERGED, lam, peak, d,
+                                   f"max_steps = {max_steps} reached before the peak")
+            elif abs(sp) < mechanism_ratio:
+                status = RunStatus(Status.MECHANISM, lam, peak, None,
+                                   f"the load no longer rises at displacement {d:.4g} m "
+                                   f"(current stiffness parameter {sp:.2g})")
+            else:
+                status = RunStatus(Status.DISPLACEMENT_LIMIT, lam, peak, None,
+                                   f"max_displacement = {max_displacement:.4g} m reached "
+                                   f"(current stiffness parameter {sp:.2g})")
+        run.status = status
+        if self.comm.rank == 0:
+            log.info("path following: %s", status.describe())
         return run
 
     # ------------------------------------------------------------------ checks
