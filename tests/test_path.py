@@ -110,7 +110,8 @@ def _stands(ratio: float, comm) -> tuple[bool, str]:
     model.add_gravity(live=True)
     contact = BlockContact(model, ContactSettings(friction=0.8, penalty_factor=20.0))
     s = StaticSolver(model, interactions=contact)
-    run = s.follow(1e-6, max_increment=1e-3, max_load=1.0, max_displacement=0.05)
+    run = s.follow(1e-6, max_increment=1e-3, max_load=1.0, max_displacement=0.05,
+                   dissipation=False)
     return run.status.status is Status.LOAD_REACHED, run.status.describe()
 
 

@@ -33,6 +33,7 @@ Units: SI (N, m).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -247,6 +248,7 @@ class StaticSolver:
         #: the factor on the dead loads (1 once :meth:`settle` has applied them)
         self.dead_factor = 1.0
         self._ref = 1.0
+        self._moved = False
         self._history: list[float] = []
         self.results: list[NewtonResult] = []
         self.u_committed = self.sets[0].uc
@@ -362,8 +364,12 @@ class StaticSolver:
             self._history = []
         self._history.append(float(fnorm))
         if not math.isfinite(fnorm):
-            return PETSc.SNES.ConvergedReason.DIVERGED_FNORM_NAN
-        if fnorm <= self.rtol * self._ref:
+            return PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_NANORINF
+        # the reference at the current iterate: moved prescribed dofs make the first
+        # iterate's reactions (and so a reference taken there) spuriously large, so such
+        # an increment is never accepted before one Newton step
+        self._ref = self._reference()
+        if fnorm <= self.rtol * self._ref and not (it == 0 and self._moved):
             return PETSc.SNES.ConvergedReason.CONVERGED_FNORM_ABS
         if it >= self.max_it:
             return PETSc.SNES.ConvergedReason.DIVERGED_MAX_IT
@@ -399,6 +405,7 @@ class StaticSolver:
             displacement: ``{prescription name: (ux, uy)}`` [m]: total displacements of
                 the prescribed dofs of that prescription (``None``: leave as it is).
         """
+        self._moved = bool(displacement)
         if displacement:
             self.prescribe(displacement)
         self._load_factor = float(load_factor)
@@ -419,10 +426,19 @@ class StaticSolver:
         fl = np.zeros(self.n_local)
         self._residual_into(fl)
         rn = math.sqrt(self.comm.allreduce(float(np.dot(fl, fl))))
+        self._ref = self._reference()
+        if converged and not (rn <= self.rtol * self._ref and (its > 0 or not self._moved)):
+            # SNES said converged but the state is not in equilibrium (seen at the
+            # first solve after a failed linear solve): not accepted
+            converged = False
+            reason = int(PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_NANORINF)
         if converged:
             self.commit()
             self.load_factor = float(load_factor)
         else:
+            # a failed solve may leave the preconditioner failed (a zero pivot): set it
+            # up afresh next time
+            self.snes.getKSP().getPC().reset()
             self.restore()
         res = NewtonResult(float(load_factor), converged, int(its), rn, self._ref,
                            _reason_name(reason), tuple(self._history))
@@ -704,12 +720,17 @@ class StaticSolver:
         q[b.sl][b.presc != 0] = 0.0
         return q
 
-    def _arc_increment(self, ds: float, a: np.ndarray, q: np.ndarray,
-                       max_backtracks: int = 6) -> tuple[NewtonResult, float]:
-        """One increment of indirect displacement control from the committed state:
-        find (u, λ) with r(u, λ) = 0 and a·(u − u_c) = ds (the bordered Newton method:
-        two solves with the same tangent per iteration). On convergence the state is
-        committed; otherwise restored. Returns (result, λ)."""
+    def _arc_increment(self, ds: float, a: np.ndarray, q: np.ndarray, b: float = 0.0,
+                       max_backtracks: int = 6, max_uphill: int = 6
+                       ) -> tuple[NewtonResult, float]:
+        """One increment of a linear path constraint from the committed state: find
+        (u, λ) with r(u, λ) = 0 and a·(u − u_c) + b (λ − λ_c) = ds (the bordered Newton
+        method: two solves with the same tangent per iteration). Indirect displacement
+        control has b = 0; dissipation control (Gutiérrez 2004) a = ½ f_ext(λ_c),
+        b = −½ q·u_c. A step that no backtracking makes decrease |r| is taken at the
+        smallest fraction at most ``max_uphill`` times (then the increment fails: an
+        orbit between two states is not worth 25 iterations). On convergence the state
+        is committed; otherwise restored. Returns (result, λ)."""
         lam_c = self.load_factor
         xc = np.zeros(self.n_local)
         self._gather(xc)
@@ -738,7 +759,7 @@ class StaticSolver:
         if not self._solve_linear(q, dq):
             reason = "DIVERGED_LINEAR_SOLVE"
         else:
-            adq = dot(a, dq)
+            adq = dot(a, dq) + b
             if adq == 0.0 or not math.isfinite(adq):
                 reason = "DIVERGED_LINEAR_SOLVE"
             else:
@@ -748,8 +769,9 @@ class StaticSolver:
                 rn = evaluate(x, lam)
                 ref = self._reference()
                 history.append(rn)
+                uphill = 0
                 while True:
-                    c = dot(a, x - xc) - ds
+                    c = dot(a, x - xc) + b * (lam - lam_c) - ds
                     if rn <= self.rtol * ref and abs(c) <= 1e-8 * abs(ds):
                         converged, reason = True, "CONVERGED_FNORM_ABS"
                         break
@@ -761,7 +783,7 @@ class StaticSolver:
                     if not (self._solve_linear(-r, dr) and self._solve_linear(q, dq)):
                         reason = "DIVERGED_LINEAR_SOLVE"
                         break
-                    adq = dot(a, dq)
+                    adq = dot(a, dq) + b
                     if adq == 0.0 or not math.isfinite(adq):
                         reason = "DIVERGED_LINEAR_SOLVE"
                         break
@@ -780,6 +802,11 @@ class StaticSolver:
                         alpha *= 0.5
                     ref = self._reference()
                     history.append(rn)
+                    if rn >= rn0:
+                        uphill += 1
+                        if uphill > max_uphill:
+                            reason = "DIVERGED_LINE_SEARCH"
+                            break
         ref = self._reference() if converged else max(self._ref, 1.0)
         if converged:
             self.commit()
@@ -795,6 +822,25 @@ class StaticSolver:
                      lam, "converged" if converged else "NOT converged", its, reason)
         return res, lam
 
+    def _dissipation_step(self, q: np.ndarray, work: float) -> list[NewtonResult]:
+        """Increments under dissipation control from the committed state, prescribing
+        5 %, then 1.25 %, then 0.3 % of ``work`` [J] as the energy dissipated; stops at
+        the first that converges. Returns every result, the last the one that counts."""
+        b = self.sets[0]
+        a = np.zeros(self.n_local)
+        f = self.dead_factor * self.model.f_dead + self.load_factor * self.model.f_live
+        a[b.sl] = np.where(b.presc != 0, 0.0, 0.5 * f)
+        xc = np.zeros(self.n_local)
+        self._gather(xc)
+        bb = -0.5 * self.comm.allreduce(float(np.dot(q, xc)))
+        out = []
+        for frac in (0.05, 0.0125, 0.003):
+            res, _ = self._arc_increment(frac * work, a, q, b=bb)
+            out.append(res)
+            if res.converged:
+                break
+        return out
+
     def follow(
         self,
         increment: float,
@@ -803,6 +849,7 @@ class StaticSolver:
         weights: np.ndarray | None = None,
         prescription: str | None = None,
         component: int = 1,
+        direction: float = 1.0,
         max_displacement: float = math.inf,
         max_load: float = math.inf,
         max_steps: int = 400,
@@ -813,6 +860,7 @@ class StaticSolver:
         peak_drop: float = 0.05,
         stop_drop: float = 0.5,
         mechanism_ratio: float = 1e-2,
+        dissipation: bool = True,
         callback: Callable[[PathPoint], None] | None = None,
     ) -> StaticRun:
         """Trace the load–displacement path from the committed state up to and past the
@@ -832,8 +880,18 @@ class StaticSolver:
           pick weights that grow monotonically, such as the loaded point's
           displacement or a crack opening);
         * ``"displacement"``: prescription ``prescription``'s ``component`` is driven by
-          ``increment`` [m] per step at a fixed live-load factor (a platen); the load is
-          its reaction along the drive, [N].
+          ``increment`` [m] per step in the sense ``direction`` (+1 or −1) at a fixed
+          live-load factor (a platen); the load is the force the platen applies along
+          the drive [N], the displacement measure the drive from the start.
+
+        Snap-backs (arc length, ``dissipation``): where an increment of the
+        displacement measure finds no equilibrium even at the smallest size — a mortar
+        joint that cracks may make
+        the loaded point move back — the increment is retried under dissipation control
+        (Gutiérrez 2004; the switching of Verhoosel et al. 2009): the energy dissipated,
+        ½ [f_ext(λ_c)·Δu − Δλ q·u_c], is prescribed instead (5 %, 1.25 % and 0.3 % of
+        the work ½ λ_c d done so far), which only grows; the next increment goes back to
+        the displacement measure. Such increments may move the measure backwards.
 
         Increments: one converging in at most ``easy_iterations`` lets the next grow
         ``grow`` times (up to ``max_increment``, default 8 × ``increment``); one that
@@ -899,7 +957,9 @@ class StaticSolver:
                 raise ValueError("displacement control needs a prescription name")
             if component not in (0, 1):
                 raise ValueError(f"component must be 0 or 1, got {component}")
-            sign = 1.0  # drive along +component; the load is the reaction along it
+            if direction not in (1.0, -1.0):
+                raise ValueError(f"direction must be 1 or -1, got {direction}")
+            sign = float(direction)  # the drive's sense; the load: the reaction along it
             names = {p.name for p in self.model.prescriptions}
             for s in self.sets[1:]:
                 names |= set(s.prescriptions)
@@ -911,7 +971,7 @@ class StaticSolver:
                 return sign * (self._prescribed_value(prescription, component) - d0)
 
             def load() -> float:
-                return -sign * float(self.reactions()[prescription][component])
+                return sign * float(self.reactions()[prescription][component])
 
         run = StaticRun(RunStatus(Status.NOT_CONVERGED, load(), load()))
         lam0 = load()
@@ -921,6 +981,7 @@ class StaticSolver:
         run.load_factors.append(self.load_factor)
         run.iterations.append(0)
         peak, k0, k_last = lam0, None, None
+        switched = 0  # increments taken under dissipation control
         step = float(increment)
         status = None
         steps = 0
@@ -931,6 +992,15 @@ class StaticSolver:
                 break
             if control == "arc-length":
                 res, _ = self._arc_increment(ds, a, q)
+                if (not res.converged and dissipation and peak > 0 and d_now > 0
+                        and step <= dmin * (1 + 1e-12)):
+                    # the load point's displacement may turn back (a joint cracking
+                    # snaps back): try the energy dissipated instead, which only grows
+                    tried = self._dissipation_step(q, 0.5 * abs(run.loads[-1]) * d_now)
+                    run.results.extend(tried[:-1])
+                    res = tried[-1]
+                    if res.converged:
+                        switched += 1
             else:
                 target = d0 + sign * (d_now + ds)
                 disp = {prescription: (target, None) if component == 0 else (None, target)}
@@ -945,7 +1015,8 @@ class StaticSolver:
                     status = RunStatus(Status.PEAK_PASSED if fell else Status.NOT_CONVERGED,
                                        lam, peak, None if fell else d_now + ds,
                                        ("the load had fallen " f"{100 * (1 - lam / peak):.0f} % "
-                                        "below its peak; then " if fell else "") + detail)
+                                        "below its peak; then " if fell else "") + detail,
+                                       at_kind="displacement")
                     break
                 step = max(0.5 * step, dmin)
                 continue
@@ -985,7 +1056,8 @@ class StaticSolver:
                                    f"displacement {d:.4g} m")
             elif steps >= max_steps:
                 status = RunStatus(Status.NOT_CONVERGED, lam, peak, d,
-                                   f"max_steps = {max_steps} reached before the peak")
+                                   f"max_steps = {max_steps} reached before the peak",
+                                   at_kind="displacement")
             elif abs(sp) < mechanism_ratio:
                 status = RunStatus(Status.MECHANISM, lam, peak, None,
                                    f"the load no longer rises at displacement {d:.4g} m "
@@ -994,6 +1066,10 @@ class StaticSolver:
                 status = RunStatus(Status.DISPLACEMENT_LIMIT, lam, peak, None,
                                    f"max_displacement = {max_displacement:.4g} m reached "
                                    f"(current stiffness parameter {sp:.2g})")
+        if switched:
+            status = dataclasses.replace(
+                status, detail=f"{status.detail}; {switched} increment(s) under dissipation "
+                               "control (snap-backs)")
         run.status = status
         if self.comm.rank == 0:
             log.info("path following: %s", status.describe())

@@ -54,6 +54,7 @@ class RunStatus:
         at: where the run stopped without equilibrium (the load factor, or the
             displacement [m], it was trying to reach); None unless not converged.
         detail: a short reason (e.g. "Newton: 25 iterations, |r|/|f| = 3e-4").
+        at_kind: what ``at`` is: "load" (a load factor or load) or "displacement" [m].
     """
 
     status: Status
@@ -61,6 +62,7 @@ class RunStatus:
     peak: float
     at: float | None = None
     detail: str = ""
+    at_kind: str = "load"
 
     @property
     def collapse_load(self) -> float | None:
@@ -81,7 +83,12 @@ class RunStatus:
 
         s = self.status
         if s is Status.NOT_CONVERGED:
-            where = f" at {q(self.at)}" if self.at is not None and math.isfinite(self.at) else ""
+            if self.at is None or not math.isfinite(self.at):
+                where = ""
+            elif self.at_kind == "displacement":
+                where = f" at displacement {self.at * 1e3:.4g} mm"
+            else:
+                where = f" at {q(self.at)}"
             text = (f"not converged{where} (carried {q(self.peak)}, a lower bound of the "
                     "collapse load)")
         elif s.gives_collapse_load:
