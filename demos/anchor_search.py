@@ -37,8 +37,8 @@ case = load_case({
     "joints": {"mortar": {"tan_phi": 10.0}},
     "loading": {"position": 0.25, "control": "displacement", "displacement_increment": 1e-4,
                 "max_displacement": 3e-4},
-    "analysis": {"dr_rtol": 1e-3, "max_iterations": 25000, "penalty_factor": 10.0,
-                 "post_peak_steps": 1, "limit_analysis": False},
+    "analysis": {"solver": "dr", "dr_rtol": 1e-3, "max_iterations": 25000,
+                 "penalty_factor": 10.0, "post_peak_steps": 1, "limit_analysis": False},
 }, name="dry_arch")
 space = SearchSpec(positions=(0.1, 0.25, 0.36, 0.5, 0.7, 0.85), counts=(1, 2),
                    inclinations=(20.0, 160.0), diameter=0.016, keep=6, keep_ratio=0.3,

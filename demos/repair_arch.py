@@ -51,4 +51,11 @@ if comm.rank == 0:
     print("  largest bar forces at the anchored peak load: " + ", ".join(
         f"{x['name']} {x['force_max'] / 1e3:.1f} kN" for x in a.anchors
         if x["force_max"] > 0.2 * max(y["force_max"] for y in a.anchors)))
+    if a.anchor_peaks:
+        top = max(a.anchor_peaks, key=lambda x: x["force_max"])
+        print(f"  largest bar force over the anchored run: {top['name']} "
+              f"{top['force_max'] / 1e3:.1f} kN ({100 * top['force_max'] / top['yield_force']:.0f} % "
+              f"of yield) at {top['displacement'] * 1e3:.2f} mm load-line displacement; the "
+              f"anchored curve ends at {a.displacements[-1] * 1e3:.2f} mm, the "
+              f"unstrengthened at {u.displacements[-1] * 1e3:.2f} mm")
     print(f"  {time.perf_counter() - t0:.0f} s; report: {res.report.resolve()}")

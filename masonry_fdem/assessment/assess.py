@@ -125,6 +125,9 @@ class Assessment:
         anchor_length: Σ count × length of the anchors [m] (0 without anchors).
         stopped_under: "load" or "displacement": the control of the last step (under
             load control with ``follow_peak`` the run may end under displacement control).
+        anchor_peaks: per anchor, its largest bar force over the whole run [N]
+            (``force_max``), the load-line displacement [m] and the load [N] where it
+            occurred, and ``yield_force`` [N] (empty without anchors).
     """
 
     case: str
@@ -148,6 +151,7 @@ class Assessment:
     anchors: list[dict] = field(default_factory=list)
     anchor_length: float = 0.0
     stopped_under: str = "load"
+    anchor_peaks: list[dict] = field(default_factory=list)
 
     @property
     def collapse_load(self) -> float | None:
@@ -188,7 +192,7 @@ class Assessment:
         if st.status is Status.NOT_CONVERGED:
             if st.at is None:
                 where = ""
-            elif self.stopped_under == "displacement":
+            elif self.stopped_under == "displacement" or st.at_kind == "displacement":
                 where = f" at {st.at * 1e3:.3g} mm load-line displacement"
             else:
                 where = f" at {st.at / 1e3:.2f} kN"
@@ -202,13 +206,15 @@ def status_dict(status: RunStatus) -> dict:
     """A :class:`RunStatus` as a JSON-able dict (:func:`status_from_dict` reads it back)."""
     return {"status": status.status.value, "load": float(status.load),
             "peak": float(status.peak), "at": None if status.at is None else float(status.at),
-            "detail": status.detail, "collapse_load": status.collapse_load}
+            "detail": status.detail, "collapse_load": status.collapse_load,
+            "at_kind": status.at_kind}
 
 
 def status_from_dict(d: Mapping[str, Any]) -> RunStatus:
     """The :class:`RunStatus` of a :func:`status_dict`."""
     return RunStatus(Status(d["status"]), float(d["load"]), float(d["peak"]),
-                     None if d.get("at") is None else float(d["at"]), d.get("detail", ""))
+                     None if d.get("at") is None else float(d["at"]), d.get("detail", ""),
+                     d.get("at_kind", "load"))
 
 
 # ---------------------------------------------------------------------------- the model
@@ -390,25 +396,63 @@ def assess(
                       force=bool(progress)) if progress is not False else None
     scale = limit_load or ld.max_load or 20 * ld.increment
 
-    dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
-                           ke_tol=math.inf, max_iter=an.max_iterations, damping="velocity")
-    res = dr.solve(0.0)
-    if res.converged and anchors is not None and any(a.prestress > 0 for a in anchors.anchors):
-        # prestressed anchors: equilibrium under self-weight and the jacking forces, then
-        # lock-off (the bond acts from here on) and equilibrium again
-        anchors.lock_off()
-        it0 = res.iterations
+    prestressed = anchors is not None and any(a.prestress > 0 for a in anchors.anchors)
+    newton = an.solver == "newton"
+    if newton:
+        from masonry_fdem.solvers.static import StaticSolver
+
+        solver = StaticSolver(model, interactions=_with(inter, anchors), rtol=an.newton_rtol,
+                              max_it=an.newton_iterations)
+        st0 = solver.settle()
+        ok, why = st0.status is Status.LOAD_REACHED, st0.detail
+        if not ok:
+            # Newton from the unloaded state, where the blocks only touch, can overshoot
+            # (stiff contact, many dry joints): dynamic relaxation settles the arch, then
+            # Newton takes over from its equilibrium
+            if comm.rank == 0:
+                log.info("%s: Newton did not settle the arch under self-weight (%s); "
+                         "dynamic relaxation settles it, Newton goes on from there",
+                         case.name, why)
+            res = DynamicRelaxation(model, interactions=_with(inter, anchors),
+                                    rtol=an.dr_rtol, ke_tol=math.inf,
+                                    max_iter=an.max_iterations, damping="velocity").solve(0.0)
+            solver.dead_factor = 1.0
+            solver.commit()
+            r0 = solver.solve(0.0)
+            ok = res.converged and r0.converged
+            why = (f"dynamic relaxation: {res.iterations} iterations, then Newton: "
+                   f"{r0.reason}")
+        if ok and prestressed:
+            # prestressed anchors: equilibrium under self-weight and the jacking forces,
+            # then lock-off (the bond acts from here on) and equilibrium again
+            anchors.lock_off()
+            r0 = solver.solve(0.0)
+            ok, why = r0.converged, f"after the anchors' lock-off ({r0.reason})"
+        if not ok:
+            raise RuntimeError(f"{case.name}: Newton found no equilibrium under self-weight "
+                               f"({why}): the arch cannot stand (or try analysis.solver = "
+                               "\"dr\")")
+        it0 = sum(r.iterations for r in solver.results)
+    else:
+        dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
+                               ke_tol=math.inf, max_iter=an.max_iterations, damping="velocity")
         res = dr.solve(0.0)
-        res = replace(res, iterations=res.iterations + it0)
-    if not res.converged:
-        raise RuntimeError(f"{case.name}: no equilibrium under self-weight within "
-                           f"{res.iterations} iterations (analysis.max_iterations): the "
-                           "arch cannot stand, or needs more iterations")
+        if res.converged and prestressed:
+            anchors.lock_off()
+            it_sw = res.iterations
+            res = dr.solve(0.0)
+            res = replace(res, iterations=res.iterations + it_sw)
+        if not res.converged:
+            raise RuntimeError(f"{case.name}: no equilibrium under self-weight within "
+                               f"{res.iterations} iterations (analysis.max_iterations): the "
+                               "arch cannot stand, or needs more iterations")
+        it0 = res.iterations
     monitor.base = monitor.openings() + monitor.base
-    loads, disps, iters = [0.0], [0.0], [res.iterations]
+    loads, disps, iters = [0.0], [0.0], [it0]
     events: list[JointEvent] = []
     seen: set[int] = set()
     state: dict[str, Any] = {"open": [], "anchors": []}
+    anchor_peaks: dict[str, dict] = {}  # per anchor: its largest bar force over the run
 
     # load-line displacement: mean vertical displacement of the nodes nearest the points
     load_nodes = [model.nearest_node(p, "voussoir:*") for p in points]
@@ -423,6 +467,13 @@ def assess(
         state["open"] = [(k, kind, side, load, disp, op[k]) for k, kind, side in opened]
         if anchors is not None:
             state["anchors"] = anchor_state(anchors)
+            for a in state["anchors"]:
+                pk = anchor_peaks.setdefault(a["name"], {
+                    "name": a["name"], "force_max": -math.inf, "displacement": 0.0,
+                    "load": 0.0, "yield_force": a["yield_force"]})
+                if a["force_max"] > pk["force_max"]:
+                    pk.update(force_max=a["force_max"], displacement=float(disp),
+                              load=float(load))
         for k, kind, side in opened:
             if k not in seen:
                 seen.add(k)
@@ -438,98 +489,133 @@ def assess(
     anchors_at_collapse: list = state["anchors"]
     collapse, resolution = 0.0, 0.0
     status: RunStatus | None = None
-    stalled = ""  # under load control with follow_peak: where load control stalled
-    drive_from = None  # load-line displacement [m] where displacement control starts
-    if ld.control is LoadControl.LOAD:
-        for p in points:
-            model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
+    if newton:
+        # path following: past the peak until the load falls to half its maximum, or to
+        # the displacement limit
+        span_t = case.arch.rings * case.arch.ring_thickness
+        d_inc = ld.displacement_increment or 1e-5 * case.arch.span
+        d_max = ld.max_displacement or 0.5 * span_t
+        best = {"load": -math.inf}
 
-        def on_step(r) -> None:
-            if r.converged:
-                record(r.load_factor, r.iterations)
-
-        cres = dr.load_to_collapse(ld.increment, max_load=ld.max_load or math.inf,
-                                   refinements=an.refinements, callback=on_step)
-        collapse, resolution = cres.load_factor, cres.resolution
-        open_at_collapse = state["open"]
-        anchors_at_collapse = state["anchors"]
-        st = cres.status
-        if st.status is Status.LOAD_REACHED:
-            status = replace(st, detail=f"max_load = {ld.max_load / 1e3:.2f} kN carried")
-        else:
-            stalled = (f"load control: no equilibrium at {st.at / 1e3:.2f} kN within "
-                       f"max_iterations = {an.max_iterations}, refinements = "
-                       f"{an.refinements}")
-            status = replace(st, detail=stalled)
-        if st.status is Status.NOT_CONVERGED and an.follow_peak:
-            # no equilibrium within the iteration limit is not yet proof that none
-            # exists (near the peak the structure is so soft that DR stalls): go on from
-            # the last equilibrium by driving the platen down
-            drive_from = disps[-1]
-            # (a quarter of the displacement reached, but not below span/1e5 when the
-            # first increment already failed)
-            dstep = ld.displacement_increment or max(disps[-1] / 4.0, 1e-5 * case.arch.span)
-    else:
-        drive_from, dstep = 0.0, ld.displacement_increment
-    stopped_under = ld.control.value
-    if drive_from is not None:
-        stopped_under = "displacement"
-        sel = [int(n) for n in load_nodes]
-        ids = comm.allgather([int(model.node_input[n]) for n in sel if n >= 0])
-        _prescribe_node_ids(model, {g for part in ids for g in part}, "platen")
-        lf = collapse if ld.control is LoadControl.LOAD else 0.0
-        # the live load stays as it was; the platen's reaction adds to it
-        dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
-                               ke_tol=math.inf, max_iter=an.max_iterations,
-                               damping="velocity")
-        peak, k_peak, falling = collapse, len(loads) - 1, 0
-        then = f"{stalled}; then " if stalled else ""
-        step = 0
-        while True:
-            step += 1
-            d = drive_from + step * dstep
-            if ld.max_displacement is not None and d > ld.max_displacement * (1 + 1e-12):
-                status = RunStatus(Status.DISPLACEMENT_LIMIT, loads[-1], peak, None,
-                                   f"{then}max_displacement = "
-                                   f"{ld.max_displacement * 1e3:.3g} mm reached before the "
-                                   "load passed a peak")
-                break
-            r = dr.solve(lf, displacement={"platen": (None, u_sw - d)})
-            if not r.converged:
-                status = RunStatus(Status.NOT_CONVERGED, loads[-1], peak, d,
-                                   f"{then}displacement control: no equilibrium at "
-                                   f"{d * 1e3:.3g} mm within max_iterations = "
-                                   f"{an.max_iterations}")
-                break
-            load = lf - float(dr.reactions()["platen"][1])
-            record(load, r.iterations)
-            if load > peak:
-                peak, k_peak, falling = load, len(loads) - 1, 0
+        def on_point(p) -> None:
+            nonlocal open_at_collapse, anchors_at_collapse
+            record(p.load, p.iterations)
+            if p.load > best["load"]:
+                best["load"] = p.load
                 open_at_collapse = state["open"]
                 anchors_at_collapse = state["anchors"]
-            else:
-                falling += 1
-            fell = 100.0 * (1.0 - load / peak) if peak > 0 else math.nan
-            if load < (1 - an.post_peak_drop) * peak:
-                status = RunStatus(Status.PEAK_PASSED, load, peak, None,
-                                   f"the load fell {fell:.1f} % below its peak "
-                                   f"(post_peak_drop = {an.post_peak_drop:g})")
-                break
-            if falling >= an.post_peak_steps:
-                status = RunStatus(Status.PEAK_PASSED, load, peak, None,
-                                   f"the load stayed below its peak for {falling} "
-                                   f"step(s) (post_peak_steps), {fell:.1f} % below it at "
-                                   "the last")
-                break
-            if ld.max_load is not None and load >= ld.max_load:
-                # carries the load asked for; no collapse sought
-                status = RunStatus(Status.LOAD_REACHED, load, peak, None,
-                                   f"max_load = {ld.max_load / 1e3:.2f} kN carried")
-                break
-        if peak > collapse or ld.control is LoadControl.DISPLACEMENT:
+
+        common = dict(max_displacement=d_max, max_load=ld.max_load or math.inf,
+                      peak_drop=an.post_peak_drop, stop_drop=max(0.5, an.post_peak_drop),
+                      callback=on_point)
+        # under either control: indirect displacement control of the load-line
+        # displacement (equal forces on the spreader's ends, as a spreader beam jacked
+        # at its middle gives; dynamic relaxation's "displacement" is a rigid platen)
+        for p in points:
+            model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
+        run = solver.follow(d_inc, **common)
+        st = run.status
+        status = replace(st, detail=f"Newton, arc length on the load-line displacement: "
+                                    f"{st.detail}")
+        stopped_under = "displacement"
+        collapse = float(st.peak)
+        if len(loads) > 1:
+            k_peak = int(np.argmax(loads))
             nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
-            resolution = max((abs(peak - x) for x in nb), default=peak)
-        collapse = peak
+            resolution = max((abs(collapse - x) for x in nb), default=collapse)
+    else:
+        stalled = ""  # under load control with follow_peak: where load control stalled
+        drive_from = None  # load-line displacement [m] where displacement control starts
+        if ld.control is LoadControl.LOAD:
+            for p in points:
+                model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
+
+            def on_step(r) -> None:
+                if r.converged:
+                    record(r.load_factor, r.iterations)
+
+            cres = dr.load_to_collapse(ld.increment, max_load=ld.max_load or math.inf,
+                                       refinements=an.refinements, callback=on_step)
+            collapse, resolution = cres.load_factor, cres.resolution
+            open_at_collapse = state["open"]
+            anchors_at_collapse = state["anchors"]
+            st = cres.status
+            if st.status is Status.LOAD_REACHED:
+                status = replace(st, detail=f"max_load = {ld.max_load / 1e3:.2f} kN carried")
+            else:
+                stalled = (f"load control: no equilibrium at {st.at / 1e3:.2f} kN within "
+                           f"max_iterations = {an.max_iterations}, refinements = "
+                           f"{an.refinements}")
+                status = replace(st, detail=stalled)
+            if st.status is Status.NOT_CONVERGED and an.follow_peak:
+                # no equilibrium within the iteration limit is not yet proof that none
+                # exists (near the peak the structure is so soft that DR stalls): go on from
+                # the last equilibrium by driving the platen down
+                drive_from = disps[-1]
+                # (a quarter of the displacement reached, but not below span/1e5 when the
+                # first increment already failed)
+                dstep = ld.displacement_increment or max(disps[-1] / 4.0, 1e-5 * case.arch.span)
+        else:
+            drive_from, dstep = 0.0, ld.displacement_increment
+        stopped_under = ld.control.value
+        if drive_from is not None:
+            stopped_under = "displacement"
+            sel = [int(n) for n in load_nodes]
+            ids = comm.allgather([int(model.node_input[n]) for n in sel if n >= 0])
+            _prescribe_node_ids(model, {g for part in ids for g in part}, "platen")
+            lf = collapse if ld.control is LoadControl.LOAD else 0.0
+            # the live load stays as it was; the platen's reaction adds to it
+            dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
+                                   ke_tol=math.inf, max_iter=an.max_iterations,
+                                   damping="velocity")
+            peak, k_peak, falling = collapse, len(loads) - 1, 0
+            then = f"{stalled}; then " if stalled else ""
+            step = 0
+            while True:
+                step += 1
+                d = drive_from + step * dstep
+                if ld.max_displacement is not None and d > ld.max_displacement * (1 + 1e-12):
+                    status = RunStatus(Status.DISPLACEMENT_LIMIT, loads[-1], peak, None,
+                                       f"{then}max_displacement = "
+                                       f"{ld.max_displacement * 1e3:.3g} mm reached before the "
+                                       "load passed a peak")
+                    break
+                r = dr.solve(lf, displacement={"platen": (None, u_sw - d)})
+                if not r.converged:
+                    status = RunStatus(Status.NOT_CONVERGED, loads[-1], peak, d,
+                                       f"{then}displacement control: no equilibrium at "
+                                       f"{d * 1e3:.3g} mm within max_iterations = "
+                                       f"{an.max_iterations}", at_kind="displacement")
+                    break
+                load = lf - float(dr.reactions()["platen"][1])
+                record(load, r.iterations)
+                if load > peak:
+                    peak, k_peak, falling = load, len(loads) - 1, 0
+                    open_at_collapse = state["open"]
+                    anchors_at_collapse = state["anchors"]
+                else:
+                    falling += 1
+                fell = 100.0 * (1.0 - load / peak) if peak > 0 else math.nan
+                if load < (1 - an.post_peak_drop) * peak:
+                    status = RunStatus(Status.PEAK_PASSED, load, peak, None,
+                                       f"the load fell {fell:.1f} % below its peak "
+                                       f"(post_peak_drop = {an.post_peak_drop:g})")
+                    break
+                if falling >= an.post_peak_steps:
+                    status = RunStatus(Status.PEAK_PASSED, load, peak, None,
+                                       f"the load stayed below its peak for {falling} "
+                                       f"step(s) (post_peak_steps), {fell:.1f} % below it at "
+                                       "the last")
+                    break
+                if ld.max_load is not None and load >= ld.max_load:
+                    # carries the load asked for; no collapse sought
+                    status = RunStatus(Status.LOAD_REACHED, load, peak, None,
+                                       f"max_load = {ld.max_load / 1e3:.2f} kN carried")
+                    break
+            if peak > collapse or ld.control is LoadControl.DISPLACEMENT:
+                nb = [loads[j] for j in (k_peak - 1, k_peak + 1) if 0 < j < len(loads)]
+                resolution = max((abs(peak - x) for x in nb), default=peak)
+            collapse = peak
     assert status is not None
     if bar is not None:
         bar.close()
@@ -544,7 +630,8 @@ def assess(
         limit_status=None if la is None else str(la.status),
         limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
-        anchor_length=0.0 if anchors is None else anchors.total_length)
+        anchor_length=0.0 if anchors is None else anchors.total_length,
+        anchor_peaks=list(anchor_peaks.values()))
     result.elapsed = time.perf_counter() - t_start
     if comm.rank == 0:
         log.info("%s: %s (%s)", case.name, result.status_line, status.detail)

@@ -64,7 +64,13 @@ Schema (``*``: required):
       ``position`` picks the joint nearest to that s.
     * "missing_brick": voussoir ``index``\\* of ring ``ring``\\* is removed.
 ``[analysis]``
-    ``limit_analysis`` run the rigid-block limit analysis first (true); ``friction``
+    ``solver`` "newton" (default: the static Newton solver traces the load–displacement
+    path by arc length on the load-line displacement, past the peak until the load falls
+    to half its maximum or to ``max_displacement``, default half the arch's thickness;
+    ``displacement_increment`` is its first step, default span/100 000; ``newton_rtol``
+    (1e-6) and ``newton_iterations`` (25) per step) or "dr" (dynamic relaxation, as
+    below: the load in increments, then the platen driven down); ``limit_analysis`` run
+    the rigid-block limit analysis first (true); ``friction``
     Coulomb coefficient of that analysis (default: the mortar's tan_phi); ``dr_rtol``
     relative residual of dynamic relaxation (1e-6); ``max_iterations`` per increment
     (200000); ``output`` run folder ("runs/<case file stem>"; relative to the working

@@ -63,8 +63,11 @@ control = "load"               # load | displacement (then displacement_incremen
 # displacement_increment = 3e-5  # [m]; under load control: the steps after a stall
 
 [analysis]
+solver = "newton"              # newton: arc length past the peak (to half the peak load
+                               # or max_displacement); dr: dynamic relaxation
 limit_analysis = true
 friction = 0.6                 # of the rigid-block limit analysis (no bond)
+# with solver = "dr":
 dr_rtol = 1e-4                 # out-of-balance force / applied load
 max_iterations = 60000         # per increment; beyond: not converged (a lower bound)
 refinements = 0                # halvings of an increment that finds no equilibrium

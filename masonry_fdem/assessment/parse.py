@@ -41,7 +41,8 @@ _DAMAGE_KEYS = {
 }
 _ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "output",
                   "refinements", "hinge_opening", "penalty_factor", "post_peak_steps",
-                  "post_peak_drop", "follow_peak")
+                  "post_peak_drop", "follow_peak", "solver", "newton_rtol",
+                  "newton_iterations")
 _ANCHOR_KEYS = ("layout", "angles", "cover", "start_angle", "end_angle", "depth", "pieces",
                 "positions", "inclination", "length",
                 "diameter", "count", "prestress", "plates", "bond_diameter", "segment", "name",
@@ -499,7 +500,10 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         an.number("penalty_factor", 20.0, gt=0.0),
         an.integer("post_peak_steps", 3, ge=1),
         an.number("post_peak_drop", 0.2, gt=0.0),
-        an.boolean("follow_peak", True))
+        an.boolean("follow_peak", True),
+        an.string("solver", "newton", ["newton", "dr"]),
+        an.number("newton_rtol", 1e-6, gt=0.0),
+        an.integer("newton_iterations", 25, ge=1))
     if analysis.post_peak_drop is not None and not analysis.post_peak_drop < 1.0:
         an.bad("post_peak_drop", f"must be < 1, got {analysis.post_peak_drop:g}")
     if not problems and None in (arch, mortar, ring, loading):

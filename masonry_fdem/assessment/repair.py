@@ -25,6 +25,7 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.assessment.assess import Assessment, assess
+from masonry_fdem.assessment.report import anchor_peaks_table
 from masonry_fdem.io.plot import save_load_curve
 from masonry_fdem.io.rundir import hand_over, partial_folder, run_folder_problem
 from masonry_fdem.assessment.case import (
@@ -235,6 +236,7 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
         "anchored_resolution_N": r1.resolution,
         "anchors": [{k: v for k, v in a.items() if k not in ("distance", "force", "slip")}
                     for a in r1.anchors],
+        "anchor_peaks": r1.anchor_peaks,
     }
     (tmp / "summary.json").write_text(json.dumps(summary, indent=1))
 
@@ -272,6 +274,9 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
         lines.append(f"| {a['name']} | {a['length']:.3f} | {a['force_max'] / 1e3:.2f} | "
                      f"{a['yield_force'] / 1e3:.2f} | {a['slip_max'] * 1e3:.3f} | "
                      f"{a['yielded']} / {a['ruptured']} |")
+    if r1.anchor_peaks:
+        lines += ["", "## Anchors over the whole run", ""] + anchor_peaks_table(
+            r1.anchor_peaks)
     lines += ["", "![anchors](anchors.png)", "", "## Mechanisms", "",
               "Unstrengthened:", "", "![unstrengthened](unstrengthened/mechanism.png)", "",
               "Anchored:", "", "![anchored](anchored/mechanism.png)", "",

@@ -169,7 +169,10 @@ def _report(case, res, mag: float) -> str:
                      "without the live load (the FDEM model has the mortar's bond) |")
     elif res.limit_status:
         lines.append(f"| limit analysis | {res.limit_status} |")
+    lines.append(f"| solver | {_solver_text(case)} |")
     lines.append(f"| wall time | {res.elapsed:.0f} s |")
+    if res.anchor_peaks:
+        lines += ["", "## Anchors", ""] + anchor_peaks_table(res.anchor_peaks)
     lines += ["", "## Load–displacement at the load line", "",
               "![load-displacement](load_displacement.png)", "",
               "## Hinge sequence", ""]
@@ -187,6 +190,29 @@ def _report(case, res, mag: float) -> str:
               f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
               "", "Files: `curve.csv`, `hinges.csv`, `summary.json`.", ""]
     return "\n".join(lines)
+
+
+def anchor_peaks_table(peaks: list[dict]) -> list[str]:
+    """Markdown lines: each anchor's largest bar force over the traced path, against
+    its yield force, and the load-line displacement and load where it occurred."""
+    lines = ["The largest bar force of each anchor over the traced path (the anchors may "
+             "work hardest after the peak), and where it occurred:", "",
+             "| anchor | largest bar force [kN] | of yield | at load-line displacement "
+             "[mm] | at load [kN] |", "|---|---|---|---|---|"]
+    for pk in peaks:
+        lines.append(f"| {pk['name']} | {pk['force_max'] / 1e3:.2f} | "
+                     f"{100 * pk['force_max'] / pk['yield_force']:.0f} % | "
+                     f"{pk['displacement'] * 1e3:.3f} | {pk['load'] / 1e3:.2f} |")
+    return lines
+
+
+def _solver_text(case) -> str:
+    an = case.analysis
+    if an.solver == "newton":
+        return (f"Newton (PETSc SNES, MUMPS), arc length on the load-line displacement; "
+                f"equilibrium to {an.newton_rtol:g} of the forces")
+    return (f"dynamic relaxation, {case.loading.control.value} control; equilibrium to "
+            f"{an.dr_rtol:g} of the forces within {an.max_iterations} iterations")
 
 
 def read_curve(path: str | Path) -> tuple[str, np.ndarray]:

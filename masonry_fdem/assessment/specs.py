@@ -143,6 +143,9 @@ class AnalysisSpec:
     post_peak_steps: int = 3
     post_peak_drop: float = 0.2
     follow_peak: bool = True
+    solver: str = "newton"
+    newton_rtol: float = 1e-6
+    newton_iterations: int = 25
 
 
 @dataclass(frozen=True)
