@@ -14,32 +14,21 @@ import pytest
 from masonry_fdem import Material, Model
 from masonry_fdem.geometry import arch_layout
 from masonry_fdem.interactions import BlockContact, ContactSettings
-from masonry_fdem.solvers.limit_analysis import limit_analysis
 from masonry_fdem.solvers.static import StaticSolver
 from masonry_fdem.solvers.status import Status
+from test_static import _arch
 
 T_OVER_R = 0.15
 
 
 def _quarter_span_arch(comm):
-    """20 dry voussoirs, intrados radius R = 1 m, t/R = 0.15, μ = 0.8, E = 10 GPa,
-    penalty factor 20; a point load at the midpoint of the extrados of the voussoir
-    over the quarter span (x = −0.5 m lies on it; the point is a node of every mesh and
-    inside one block for the limit analysis). Returns (model, contact, LP load [N])."""
-    t = T_OVER_R
-    lay = arch_layout(span=2.0, ring_thickness=t, voussoirs=20, abutment_height=0.3,
-                      abutment_width=0.4)
-    r = (1.0 + t) * math.cos(math.radians(4.5))  # the extrados chord's midpoint
-    point = (r * math.cos(math.radians(112.5)), r * math.sin(math.radians(112.5)))
-    mats = {"voussoir": Material(2000.0, 10e9, 0.2), "abutment": Material(2000.0, 30e9, 0.2)}
-    model = Model(lay.mesh(0.1, comm), mats, width=1.0, comm=comm)
-    model.fix_blocks("abutment:*")
-    model.add_gravity()
-    model.add_point_load(point, (0.0, -1.0), blocks="voussoir:*")
-    contact = BlockContact(model, ContactSettings(friction=0.8, penalty_factor=20.0))
-    la = limit_analysis(lay, density=2000.0, width=1.0, supports="abutment:*",
-                        live_loads=[(point, (0.0, -1.0))], friction=0.8)
-    return model, contact, float(la.load_factor)
+    """The dry arch of ``tests/test_static.py`` (20 voussoirs, intrados radius R = 1 m,
+    t/R = 0.15, μ = 0.8, E = 10 GPa, penalty factor 20) with the point load at the
+    midpoint of the extrados of the voussoir over the quarter span (x = −0.5 m lies on
+    it; the point is a node of every mesh and inside one block for the limit analysis).
+    Returns (model, contact, LP load [N])."""
+    r = (1.0 + T_OVER_R) * math.cos(math.radians(4.5))  # the extrados chord's midpoint
+    return _arch(comm, (r * math.cos(math.radians(112.5)), r * math.sin(math.radians(112.5))))
 
 
 def _trace(comm, increment=2e-5, rtol=1e-6):

@@ -161,13 +161,15 @@ def test_contact_tangent_in_stick_and_in_slip(push, friction, sliding):
         assert asym > 1e-3
 
 
-def _arch(comm):
-    """20 dry voussoirs, R = 1 m, t/R = 0.15, μ = 0.8, point load at quarter span."""
+def _arch(comm, point=None):
+    """20 dry voussoirs, R = 1 m, t/R = 0.15, μ = 0.8, a downward unit point load at
+    ``point`` (default: the extrados at 135°). Returns (model, contact, LP load [N])."""
     t = 0.15
     lay = arch_layout(span=2.0, ring_thickness=t, voussoirs=20, abutment_height=0.3,
                       abutment_width=0.4)
-    r = 1.0 + t
-    point = (r * math.cos(math.radians(135.0)), r * math.sin(math.radians(135.0)))
+    if point is None:
+        r = 1.0 + t
+        point = (r * math.cos(math.radians(135.0)), r * math.sin(math.radians(135.0)))
     mats = {"voussoir": Material(2000.0, 10e9, 0.2), "abutment": Material(2000.0, 30e9, 0.2)}
     model = Model(lay.mesh(0.1, comm), mats, width=1.0, comm=comm)
     model.fix_blocks("abutment:*")

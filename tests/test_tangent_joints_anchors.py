@@ -28,10 +28,10 @@ from mpi4py import MPI
 
 import numpy as np
 import pytest
-from conftest import alternating_grid
+from test_anchors import grid_blocks
 
 from masonry_fdem import Material, Model
-from masonry_fdem.geometry import BlockMesh, build_stack
+from masonry_fdem.geometry import build_stack
 from masonry_fdem.interactions import JointMaterial, Joints
 from masonry_fdem.interactions.anchors import Anchor, Anchors, BondLaw, DowelLaw, SteelLaw
 from masonry_fdem.interactions.anchors import _kernels as AK
@@ -74,20 +74,6 @@ BRICK = Material(density=2000.0, E=5e9, nu=0.2)
 BOND = BondLaw((2e-4, 1e-3, 3e-3), (3e6, 3e6, 0.5e6))  # rise, plateau, softening
 STEEL = SteelLaw(E=200e9, yield_stress=500e6, hardening=2e9, rupture_strain=0.05)
 A_START, A_END = np.array([0.11, 0.09]), np.array([0.49, 0.11])
-
-
-def grid_blocks(boxes, h):
-    xs, cells, cb = [], [], []
-    n0 = 0
-    for b, (x0, y0, x1, y1) in enumerate(boxes):
-        x, c, _ = alternating_grid(x1 - x0, y1 - y0, h)
-        xs.append(x + [x0, y0])
-        cells.append(c + n0)
-        cb.append(np.full(len(c), b))
-        n0 += len(x)
-    return BlockMesh.from_arrays(np.vstack(xs), np.vstack(cells), np.concatenate(cb),
-                                 block_names=[f"block:{b}" for b in range(len(boxes))],
-                                 material_names=["brick"])
 
 
 def anchor_model(comm=MPI.COMM_SELF, **kw):

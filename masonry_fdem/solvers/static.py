@@ -249,6 +249,7 @@ class StaticSolver:
         self.dead_factor = 1.0
         self._ref = 1.0
         self._moved = False
+        self._work: tuple[PETSc.Vec, PETSc.Vec] | None = None  # rhs, solution of K x = b
         self._history: list[float] = []
         self.results: list[NewtonResult] = []
         self.u_committed = self.sets[0].uc
@@ -685,8 +686,9 @@ class StaticSolver:
     def _solve_linear(self, rhs: np.ndarray, out: np.ndarray) -> bool:
         """out = K⁻¹ rhs with the assembled tangent (local arrays; collective). False if
         the linear solver failed (a zero pivot: a singular tangent)."""
-        b = self.F.duplicate()
-        x = self.x.duplicate()
+        if self._work is None:
+            self._work = (self.F.duplicate(), self.x.duplicate())
+        b, x = self._work
         b.array[:] = rhs
         ksp = self.snes.getKSP()
         ksp.setOperators(self.J, self.J)
@@ -696,8 +698,6 @@ class StaticSolver:
             return False
         ok = ksp.getConvergedReason() > 0 and np.all(np.isfinite(x.array))
         out[:] = x.array
-        b.destroy()
-        x.destroy()
         return bool(self.comm.allreduce(ok, op=MPI.LAND))
 
     def _set_load(self, lam: float) -> None:
