@@ -494,7 +494,8 @@ def _evaluate(base: ArchCase, lay: AnchorLayout | None, ell: float, spec: Search
     row = {"level": level, "key": key, "status": r.status.status.value,
            "peak_load": float(r.peak_load), "collapse_load": r.collapse_load,
            "detail": r.status.detail, "resolution": float(r.resolution),
-           "length": ell, "steps": len(r.loads), "elapsed": time.perf_counter() - t}
+           "length": ell, "steps": len(r.loads), "elapsed": time.perf_counter() - t,
+           "peak_displacement": float(r.displacements[int(np.argmax(r.loads))])}
     if r.anchors:
         row["force_max"] = max(a["force_max"] for a in r.anchors)
         row["slip_max"] = max(a["slip_max"] for a in r.anchors)
