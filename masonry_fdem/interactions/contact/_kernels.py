@@ -45,8 +45,14 @@ N_WORK = 5
 
 
 @njit(cache=True)
-def _pos(X, u, node):
-    return X[node, 0] + u[2 * node], X[node, 1] + u[2 * node + 1]
+def _pos(X, u, node, ox, oy):
+    """Current position of ``node`` relative to the origin (ox, oy) [m]: the reference
+    offset first, then the displacement. Every rule of a pass is translation invariant;
+    with the origin at a reference node of the pair, the offsets between the nodes of a
+    joint are exact (zero for coincident nodes) and the gaps keep the full precision of
+    the displacements, instead of the ~1e-16 m of an absolute coordinate near 1 m (which
+    times a stiff penalty gave a force round-off floor near 1e-7 of the loads)."""
+    return (X[node, 0] - ox) + u[2 * node], (X[node, 1] - oy) + u[2 * node + 1]
 
 
 @njit(cache=True)
@@ -142,13 +148,16 @@ def _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, shi
 
 @njit(cache=True)
 def _pass_zone(X, u, facets, fprev, fnext, fs, fm, depth, shift, work):
-    """Zone of slave facet fs on master facet fm; returns the four facet end points."""
-    q1x, q1y = _pos(X, u, facets[fs, 0])
-    q2x, q2y = _pos(X, u, facets[fs, 1])
-    p1x, p1y = _pos(X, u, facets[fm, 0])
-    p2x, p2y = _pos(X, u, facets[fm, 1])
-    p0x, p0y = _pos(X, u, facets[fprev[fm], 0])
-    p3x, p3y = _pos(X, u, facets[fnext[fm], 1])
+    """Zone of slave facet fs on master facet fm; returns the four facet end points
+    relative to the reference position of the master's first node."""
+    ox = X[facets[fm, 0], 0]
+    oy = X[facets[fm, 0], 1]
+    q1x, q1y = _pos(X, u, facets[fs, 0], ox, oy)
+    q2x, q2y = _pos(X, u, facets[fs, 1], ox, oy)
+    p1x, p1y = _pos(X, u, facets[fm, 0], ox, oy)
+    p2x, p2y = _pos(X, u, facets[fm, 1], ox, oy)
+    p0x, p0y = _pos(X, u, facets[fprev[fm], 0], ox, oy)
+    p3x, p3y = _pos(X, u, facets[fnext[fm], 1], ox, oy)
     _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, shift, work)
     return q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y
 
@@ -173,10 +182,12 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, hyst
     fb = pairs[k, 1]
     # cheap rejection: facets whose boxes are further apart than the largest
     # penetration considered cannot be in contact
-    ax1, ay1 = _pos(X, u, facets[fa, 0])
-    ax2, ay2 = _pos(X, u, facets[fa, 1])
-    bx1, by1 = _pos(X, u, facets[fb, 0])
-    bx2, by2 = _pos(X, u, facets[fb, 1])
+    ox = X[facets[fa, 0], 0]
+    oy = X[facets[fa, 0], 1]
+    ax1, ay1 = _pos(X, u, facets[fa, 0], ox, oy)
+    ax2, ay2 = _pos(X, u, facets[fa, 1], ox, oy)
+    bx1, by1 = _pos(X, u, facets[fb, 0], ox, oy)
+    bx2, by2 = _pos(X, u, facets[fb, 1], ox, oy)
     dk = depth[k]
     if (min(ax1, ax2) > max(bx1, bx2) + dk or min(bx1, bx2) > max(ax1, ax2) + dk
             or min(ay1, ay2) > max(by1, by2) + dk or min(by1, by2) > max(ay1, ay2) + dk):
@@ -360,10 +371,12 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
             fbuf[2 * nodes[j] + 1] = 0.0
         # a pair out of reach of the perturbations has no tangent; one that is not in
         # contact but within reach (touching, up to round-off) is treated as at the apex
-        ax1, ay1 = _pos(X, u, nodes[0])
-        ax2, ay2 = _pos(X, u, nodes[1])
-        bx1, by1 = _pos(X, u, nodes[2])
-        bx2, by2 = _pos(X, u, nodes[3])
+        ox = X[nodes[0], 0]
+        oy = X[nodes[0], 1]
+        ax1, ay1 = _pos(X, u, nodes[0], ox, oy)
+        ax2, ay2 = _pos(X, u, nodes[1], ox, oy)
+        bx1, by1 = _pos(X, u, nodes[2], ox, oy)
+        bx2, by2 = _pos(X, u, nodes[3], ox, oy)
         dk = depth[k] + 4.0 * h
         near = not (min(ax1, ax2) > max(bx1, bx2) + dk or min(bx1, bx2) > max(ax1, ax2) + dk
                     or min(ay1, ay2) > max(by1, by2) + dk

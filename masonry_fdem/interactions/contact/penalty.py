@@ -447,12 +447,14 @@ class BlockContact(Interaction):
 
     @property
     def fd_step(self) -> float:
-        """Finite-difference step [m] of the tangent: 1e-9 of the mean facet length. It
-        must lie well below the penetrations (a stiff penalty under self-weight
-        penetrates ~1e-8 m); the force is piecewise polynomial in the positions, so the
-        truncation error is nil, and the round-off of X + u (~1e-16 m per metre of
-        coordinate) costs ~1e-6 of the stiffness."""
-        return 1e-9 * self.h
+        """Finite-difference step [m] of the tangent: 1e-10 of the mean facet length. It
+        must lie well below the penetrations and the contact zones' slivers (at a stiff
+        penalty, ε_n ~ 1e13 Pa/m, lightly loaded joints penetrate ~1e-10 m, and a step
+        of 1e-9 of the facet length straddled the kinks there: the tangent missed the
+        normal stiffness of those pairs and Newton stalled); the force is piecewise
+        polynomial in the positions, so the truncation error is nil, and the round-off
+        of X + u (~1e-16 m per metre of coordinate) costs ~1e-5 of the stiffness."""
+        return 1e-10 * self.h
 
     def commit(self) -> None:
         """Keep the tangential history as the committed one (static evaluations start
