@@ -36,7 +36,8 @@ demo: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/materials.py --out out_materials
 	$(MPIRUN) -n $(NP) $(PY) demos/silo.py --out out_silo
 
-# a small anchor layout search (one to two minutes on 2 cores)
+# a small anchor layout search, then layouts per hour on the reference arch (under a
+# minute on 2 cores)
 demo-search: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/anchor_search.py --out out_anchor_search
 

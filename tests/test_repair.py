@@ -237,6 +237,70 @@ def test_a_lower_bound_never_outranks_a_measured_collapse_load(tmp_path_factory)
     assert "status" in rows[0] and "not converged" in rows[3]
 
 
+def test_newton_search_gives_every_layout_a_status_and_ranks_a_bound_last(tmp_path_factory):
+    """The search under the Newton solver (the default): the dry arch traced past its
+    peak to 3 mm (a 5 % fall: peak passed), and ``max_load`` = 6 kN, which the anchor at
+    s = 0.36 carries (its peak is 6.77 kN) while the bare arch (4.85 kN) and the anchors
+    at s = 0.1 and 0.7 (5.18, 5.52 kN) pass their peaks below it. Every ranked layout
+    carries its run's status; the one that ends *load reached* has the largest load and
+    gain per metre but is a lower bound, ranked after the measured peaks. The coarse
+    level is the same path cut short after the unstrengthened arch's peak (its fine run
+    comes first): fewer steps, the same peaks."""
+    import copy as _copy
+
+    from masonry_fdem.assessment.search import COARSE_TRAVEL
+
+    data = _copy.deepcopy(DRY)
+    data["loading"] = {"position": 0.25, "displacement_increment": 1e-4,
+                       "max_displacement": 3e-3, "max_load": 6000.0, "increment": 1000.0}
+    data["analysis"] = {"penalty_factor": 10.0, "post_peak_drop": 0.05,
+                        "limit_analysis": False}
+    case = load_case(data, name="dry_newton")
+    assert case.analysis.solver == "newton"
+    space = SearchSpec(positions=(0.1, 0.36, 0.7), counts=(1,), inclinations=(20.0,),
+                       keep=3, keep_ratio=0.0)
+    out = _shared_tmp(tmp_path_factory, "newton_search") / "run"
+    res = search(case, space, out=out)
+    rows = [json.loads(x) for x in (out / "journal.jsonl").read_text().splitlines()]
+    print("\nNewton search: " + "; ".join(f"{r.rank}. {r.key}: {r.load_text}"
+                                         for r in res.ranking)
+          + f"; journal {[(x['level'], x['key'], x['status'], x['steps']) for x in rows]}")
+    keys = [lay.key for lay in space.candidates()]
+    # the fine baseline first, then the coarse level, then the fine runs: all new
+    assert (rows[0]["level"], rows[0]["key"]) == ("fine", BASELINE)
+    assert res.evaluations == len(rows) == 1 + 4 + 3 and res.reused == 0
+    assert res.baseline_status == "peak passed"
+    assert res.baseline == pytest.approx(4850.0, rel=0.01)
+    # every ranked layout carries its status; the bound ranks after the measured peaks
+    assert all(Status(r.status) for r in res.ranking)
+    assert [r.key for r in res.ranking] == [keys[2], keys[0], keys[1]]
+    assert [r.status for r in res.ranking] == ["peak passed", "peak passed", "load reached"]
+    last = res.ranking[-1]
+    assert last.collapse_load is None and last.peak_load >= 6000.0
+    assert last.gain_per_metre > res.ranking[0].gain_per_metre
+    # (the step that reaches max_load may overshoot it: Newton does not cut it back)
+    assert last.load_text.startswith(">= ") and last.load_text.endswith(
+        " kN (lower bound: load reached)")
+    assert last.gain_kind == "lower bound"
+    # the coarse level: cut short at COARSE_TRAVEL x the bare arch's peak displacement,
+    # cheaper, the same peaks (they lie well before it)
+    fine = {x["key"]: x for x in rows if x["level"] == "fine"}
+    coarse = {x["key"]: x for x in rows if x["level"] == "coarse"}
+    d_peak = fine[BASELINE]["peak_displacement"]
+    assert 1e-4 < d_peak < 1e-3 and COARSE_TRAVEL * d_peak < 1.5e-3
+    for key in (BASELINE, keys[0], keys[2]):
+        assert coarse[key]["steps"] < fine[key]["steps"]
+        assert coarse[key]["peak_load"] == pytest.approx(fine[key]["peak_load"], rel=1e-6)
+    text = (out / "report.md").read_text(encoding="utf-8")
+    assert "| 3 | " in text and "| load reached | ≥ " in text
+    assert "they rank after every measured one" in text
+    # resumed from its journal: nothing runs, every run counted once, the same ranking
+    again = search(case, space, out=out, resume=True)
+    assert (again.evaluations, again.reused) == (0, len(rows))
+    assert [(r.key, r.status) for r in again.ranking] == \
+        [(r.key, r.status) for r in res.ranking]
+
+
 def test_anchors_leaving_the_arch_in_a_case_file_are_refused():
     data = copy.deepcopy(DRY)
     data["anchors"] = [{"layout": "inclined", "positions": [0.3], "inclination": 20.0,

@@ -12,10 +12,17 @@ drilled from the intrados (:func:`~masonry_fdem.assessment.layouts.inclined_anch
 * **Objectives.** ``gain_per_metre``: the largest collapse-load gain over the
   unstrengthened arch per metre of anchor installed (Σ bars × length).
   ``cheapest``: the shortest total anchor length whose collapse load reaches ``target``.
-* **Coarse to fine.** The coarse level is a shorter run of each layout: under load
-  control without following the peak (``follow_peak = false``: the load where
-  equilibrium is first lost), under displacement control to half of
-  ``max_displacement``; a fast proxy of the collapse load. Layouts whose coarse gain
+* **Coarse to fine.** The coarse level is a shorter run of each layout, a fast proxy
+  of the collapse load. Under the Newton solver (``analysis.solver = "newton"``, the
+  default) it is the same path cut short: traced to :data:`COARSE_TRAVEL` times the
+  load-line displacement at which the unstrengthened arch peaked in its fine run (run
+  first), at most half the fine run's travel (``max_displacement``, or Newton's default
+  of half the arch's thickness) — the fine run goes on past the peak until the load has
+  fallen to half of it or that travel is used up, which is most of its cost. A layout
+  that peaks later than that shows a lower bound at the coarse level. Under dynamic
+  relaxation (``"dr"``): under load control without following the peak (``follow_peak =
+  false``: the load where equilibrium is first lost), under displacement control to
+  half of ``max_displacement``. Layouts whose coarse gain
   per metre is below ``keep_ratio`` of the best, or that are not among the best
   ``keep``, are dropped as hopeless; the rest are run at the fine level (the case's own
   analysis, peak followed).
@@ -64,7 +71,11 @@ from masonry_fdem.assessment.case import AnchorLayout, ArchCase, CaseError, Obje
 from masonry_fdem.assessment.repair import BASELINE, as_case, free_folder, gain_kind
 from masonry_fdem.solvers.status import Status
 
-__all__ = ["RankedLayout", "SearchInterrupted", "SearchResult", "search"]
+__all__ = ["COARSE_TRAVEL", "RankedLayout", "SearchInterrupted", "SearchResult", "search"]
+
+COARSE_TRAVEL = 4.0
+"""Under the Newton solver, the coarse level traces each layout to this many times the
+load-line displacement at which the unstrengthened arch peaked (its fine run)."""
 
 
 class SearchInterrupted(RuntimeError):
@@ -186,14 +197,33 @@ def _fingerprint(case: ArchCase, spec: SearchSpec) -> str:
     parts = [repr(case.arch), repr(sorted(case.material_table.items())), repr(case.mortar),
              repr(case.ring_joint), repr(case.loading), repr(case.damage),
              repr(replace(case.analysis, output=Path("."))), repr(spec),
-             "journal rows with the run status (v2)"]
+             "journal rows with the run status; Newton's coarse level cut short after the "
+             "unstrengthened peak (v3)"]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
 
 
-def _level_case(case: ArchCase, level: str, spec: SearchSpec) -> ArchCase:
+def _newton(case: ArchCase) -> bool:
+    return case.analysis.solver == "newton"
+
+
+def _level_case(case: ArchCase, level: str, spec: SearchSpec,
+                peak_displacement: float | None = None) -> ArchCase:
+    """The case run at ``level`` (without anchors); ``peak_displacement`` [m]: where the
+    unstrengthened arch peaked in its fine run (Newton's coarse level is cut short a few
+    times that far)."""
     an = replace(case.analysis, limit_analysis=False)
     ld = case.loading
-    if level == "coarse":
+    if level == "coarse" and _newton(case):
+        # Newton follows the peak by itself (follow_peak is dynamic relaxation's); its
+        # fine run goes on to half the peak load or to the travel limit (assess's default:
+        # half the arch's thickness); the coarse run stops a few times past the
+        # unstrengthened peak's displacement, at most at half that travel
+        full = ld.max_displacement or 0.5 * case.arch.rings * case.arch.ring_thickness
+        travel = 0.5 * full
+        if peak_displacement is not None and peak_displacement > 0:
+            travel = min(travel, COARSE_TRAVEL * peak_displacement)
+        ld = replace(ld, max_displacement=travel)
+    elif level == "coarse":
         an = replace(an, follow_peak=False)
         if ld.max_displacement is not None:
             ld = replace(ld, max_displacement=0.5 * ld.max_displacement)
@@ -303,6 +333,8 @@ def search(
     ngroups = comm.size // group_size
     sub = comm.Split(comm.rank // group_size, comm.rank)
     stats = {"new": 0, "reused": 0}
+    ran: set[tuple[str, str]] = set()  # (level, key) run by this call ...
+    reused: set[tuple[str, str]] = set()  # ... and taken from the journal
 
     # ---- checks: build every layout's anchors, reject the bad ones with the reason
     rejected: list[tuple[str, str]] = []
@@ -326,10 +358,16 @@ def search(
     def run(level: str, todo: list[tuple[AnchorLayout | None, float]],
             stop: Callable[[list[dict]], bool] | None = None) -> None:
         """Evaluate ``todo`` (None: the unstrengthened arch) at ``level``, in rounds."""
-        base = _level_case(case, level, spec)
+        peak_d = None
+        if level == "coarse" and _newton(case):
+            peak_d = journal.done[("fine", BASELINE)].get("peak_displacement")
+        base = _level_case(case, level, spec, peak_d)
         pending = [(lay, ell) for lay, ell in todo
                    if (level, lay.key if lay else BASELINE) not in journal.done]
-        stats["reused"] += len(todo) - len(pending)
+        reused.update((level, lay.key if lay else BASELINE) for lay, _ in todo
+                      if (level, lay.key if lay else BASELINE) in journal.done)
+        reused.difference_update(ran)
+        stats["reused"] = len(reused)
         if stop is not None and stop([journal.done[(level, lay.key if lay else BASELINE)]
                                       for lay, _ in todo
                                       if (level, lay.key if lay else BASELINE)
@@ -349,6 +387,7 @@ def search(
             # in rank order, that is in the order of the batch
             rows = [r for r in comm.allgather(row if sub.rank == 0 else None) if r is not None]
             journal.add(rows)
+            ran.update((r["level"], r["key"]) for r in rows)
             stats["new"] += len(rows)
             if callback is not None:
                 callback({"level": level, "done": r0 + len(batch), "total": len(pending)})
@@ -363,6 +402,10 @@ def search(
     levels = ["coarse", "fine"] if spec.coarse and len(valid) > 1 else ["fine"]
     coarse: dict[str, float] = {}
     target = spec.target
+    if "coarse" in levels and _newton(case):
+        # the coarse level is cut short after the unstrengthened arch's peak: trace it first
+        run("fine", [(None, 0.0)])
+        _peak(load("fine", None))
     for level in levels:
         last = level == levels[-1]
         if spec.objective is Objective.CHEAPEST:
