@@ -507,7 +507,7 @@ def assess(
 
         common = dict(max_displacement=d_max, max_load=ld.max_load or math.inf,
                       peak_drop=an.post_peak_drop, stop_drop=max(0.5, an.post_peak_drop),
-                      callback=on_point)
+                      max_steps=an.newton_steps, callback=on_point)
         # under either control: indirect displacement control of the load-line
         # displacement (equal forces on the spreader's ends, as a spreader beam jacked
         # at its middle gives; dynamic relaxation's "displacement" is a rigid platen)

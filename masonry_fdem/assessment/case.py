@@ -68,7 +68,8 @@ Schema (``*``: required):
     path by arc length on the load-line displacement, past the peak until the load falls
     to half its maximum or to ``max_displacement``, default half the arch's thickness;
     ``displacement_increment`` is its first step, default span/100 000; ``newton_rtol``
-    (1e-6) and ``newton_iterations`` (25) per step) or "dr" (dynamic relaxation, as
+    (1e-6) and ``newton_iterations`` (25) per step, ``newton_steps`` (400) converged
+    increments at most) or "dr" (dynamic relaxation, as
     below: the load in increments, then the platen driven down); ``limit_analysis`` run
     the rigid-block limit analysis first (true); ``friction``
     Coulomb coefficient of that analysis (default: the mortar's tan_phi); ``dr_rtol``

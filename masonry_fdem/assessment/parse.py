@@ -42,7 +42,7 @@ _DAMAGE_KEYS = {
 _ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "output",
                   "refinements", "hinge_opening", "penalty_factor", "post_peak_steps",
                   "post_peak_drop", "follow_peak", "solver", "newton_rtol",
-                  "newton_iterations")
+                  "newton_iterations", "newton_steps")
 _ANCHOR_KEYS = ("layout", "angles", "cover", "start_angle", "end_angle", "depth", "pieces",
                 "positions", "inclination", "length",
                 "diameter", "count", "prestress", "plates", "bond_diameter", "segment", "name",
@@ -503,7 +503,8 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         an.boolean("follow_peak", True),
         an.string("solver", "newton", ["newton", "dr"]),
         an.number("newton_rtol", 1e-6, gt=0.0),
-        an.integer("newton_iterations", 25, ge=1))
+        an.integer("newton_iterations", 25, ge=1),
+        an.integer("newton_steps", 400, ge=1))
     if analysis.post_peak_drop is not None and not analysis.post_peak_drop < 1.0:
         an.bad("post_peak_drop", f"must be < 1, got {analysis.post_peak_drop:g}")
     if not problems and None in (arch, mortar, ring, loading):

@@ -134,9 +134,15 @@ def _report(case, res, mag: float) -> str:
     if res.status.detail:
         lines += [f"How the run ended: {res.status.detail}.", ""]
     if not res.collapsed:
-        lines += ["The run gives no collapse load: to find one, drive it past the peak "
-                  "(displacement control, `follow_peak`, more `max_iterations`, a larger "
-                  "`max_displacement` or `max_load`).", ""]
+        if case.analysis.solver == "newton":
+            lines += ["The run gives no collapse load: to find one, trace it further (more "
+                      "`newton_steps` or `newton_iterations`, a smaller "
+                      "`displacement_increment`, a larger `max_displacement` or "
+                      "`max_load`).", ""]
+        else:
+            lines += ["The run gives no collapse load: to find one, drive it past the peak "
+                      "(displacement control, `follow_peak`, more `max_iterations`, a larger "
+                      "`max_displacement` or `max_load`).", ""]
     lines += [
         f"- Arch: {a.kind.value}, span {a.span:g} m, {a.rings} ring(s) of {a.ring_thickness:g} m, "
         f"voussoirs {list(a.voussoirs)}, barrel width {a.width:g} m; {res.cells} triangles.",

@@ -146,6 +146,7 @@ class AnalysisSpec:
     solver: str = "newton"
     newton_rtol: float = 1e-6
     newton_iterations: int = 25
+    newton_steps: int = 400
 
 
 @dataclass(frozen=True)

@@ -822,10 +822,13 @@ class StaticSolver:
                      lam, "converged" if converged else "NOT converged", its, reason)
         return res, lam
 
-    def _dissipation_step(self, q: np.ndarray, work: float) -> list[NewtonResult]:
+    def _dissipation_step(self, q: np.ndarray, work: float,
+                          fractions: Sequence[float] = (0.05, 0.0125, 0.003)
+                          ) -> tuple[list[NewtonResult], float]:
         """Increments under dissipation control from the committed state, prescribing
-        5 %, then 1.25 %, then 0.3 % of ``work`` [J] as the energy dissipated; stops at
-        the first that converges. Returns every result, the last the one that counts."""
+        ``fractions`` of ``work`` [J] (in turn: 5 %, then 1.25 %, then 0.3 %) as the
+        energy dissipated; stops at the first that converges. Returns every result (the
+        last the one that counts) and the fraction of the last."""
         b = self.sets[0]
         a = np.zeros(self.n_local)
         f = self.dead_factor * self.model.f_dead + self.load_factor * self.model.f_live
@@ -834,12 +837,12 @@ class StaticSolver:
         self._gather(xc)
         bb = -0.5 * self.comm.allreduce(float(np.dot(q, xc)))
         out = []
-        for frac in (0.05, 0.0125, 0.003):
+        for frac in fractions:
             res, _ = self._arc_increment(frac * work, a, q, b=bb)
             out.append(res)
             if res.converged:
                 break
-        return out
+        return out, frac
 
     def follow(
         self,
@@ -890,8 +893,13 @@ class StaticSolver:
         the loaded point move back — the increment is retried under dissipation control
         (Gutiérrez 2004; the switching of Verhoosel et al. 2009): the energy dissipated,
         ½ [f_ext(λ_c)·Δu − Δλ q·u_c], is prescribed instead (5 %, 1.25 % and 0.3 % of
-        the work ½ λ_c d done so far), which only grows; the next increment goes back to
-        the displacement measure. Such increments may move the measure backwards.
+        the work ½ λ_c d done so far), which only grows. Each increment that follows
+        tries the displacement measure's smallest increment first — an equilibrium at the
+        next displacement ends the snap-back (where a jack under displacement control
+        would jump to) — and else stays under dissipation control, at the fraction that
+        converged last (grown by ``grow`` after an easy one, at most 5 %; cut to a
+        quarter and a sixteenth on failure), until the displacement measure moves
+        forward. Such increments may move the measure backwards.
 
         Increments: one converging in at most ``easy_iterations`` lets the next grow
         ``grow`` times (up to ``max_increment``, default 8 × ``increment``); one that
@@ -982,6 +990,7 @@ class StaticSolver:
         run.iterations.append(0)
         peak, k0, k_last = lam0, None, None
         switched = 0  # increments taken under dissipation control
+        diss: float | None = None  # on a snap-back: the fraction of ½ λ d dissipated per step
         step = float(increment)
         status = None
         steps = 0
@@ -990,24 +999,46 @@ class StaticSolver:
             ds = min(step, max_displacement - d_now) if math.isfinite(max_displacement) else step
             if ds <= 1e-12 * max(abs(max_displacement), 1.0):
                 break
-            if control == "arc-length":
+            in_snap = diss is not None
+            if control == "arc-length" and in_snap:
+                # on a snap-back: first the displacement measure's smallest increment (an
+                # equilibrium ahead at the next displacement ends the snap-back, as a
+                # jack under displacement control would jump to it); else go on under
+                # dissipation control, at the fraction that worked last (grown after an
+                # easy increment)
+                res, _ = self._arc_increment(min(dmin, ds), a, q)
+                if res.converged:
+                    in_snap = False
+                    diss, step = None, dmin
+                else:
+                    run.results.append(res)
+                    tried, frac = self._dissipation_step(
+                        q, 0.5 * abs(run.loads[-1]) * d_now, (diss, diss / 4.0, diss / 16.0))
+                    run.results.extend(tried[:-1])
+                    res = tried[-1]
+                    if res.converged:
+                        switched += 1
+                        diss = min(frac * (grow if res.iterations <= easy_iterations
+                                           else 1.0), 0.05)
+            elif control == "arc-length":
                 res, _ = self._arc_increment(ds, a, q)
                 if (not res.converged and dissipation and peak > 0 and d_now > 0
                         and step <= dmin * (1 + 1e-12)):
                     # the load point's displacement may turn back (a joint cracking
                     # snaps back): try the energy dissipated instead, which only grows
-                    tried = self._dissipation_step(q, 0.5 * abs(run.loads[-1]) * d_now)
+                    tried, frac = self._dissipation_step(q, 0.5 * abs(run.loads[-1]) * d_now)
                     run.results.extend(tried[:-1])
                     res = tried[-1]
                     if res.converged:
                         switched += 1
+                        in_snap, diss = True, frac
             else:
                 target = d0 + sign * (d_now + ds)
                 disp = {prescription: (target, None) if component == 0 else (None, target)}
                 res = self.solve(self.load_factor, displacement=disp)
             run.results.append(res)
             if not res.converged:
-                if step <= dmin * (1 + 1e-12):
+                if step <= dmin * (1 + 1e-12) or in_snap:
                     lam = run.loads[-1]
                     detail = (f"Newton did not converge ({res.reason}) at displacement "
                               f"{d_now + ds:.4g} m after cut-backs to {dmin:.3g} m")
@@ -1033,6 +1064,10 @@ class StaticSolver:
             run.load_factors.append(self.load_factor)
             run.iterations.append(res.iterations)
             peak = max(peak, lam)
+            if in_snap and dd > 0:
+                # the snap-back is over: back to the displacement measure, from its
+                # smallest increment
+                diss, step = None, dmin
             if callback is not None:
                 callback(PathPoint(lam, d, self.load_factor, res.iterations))
             if lam >= max_load:
