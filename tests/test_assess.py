@@ -347,3 +347,38 @@ def _toml(data: dict) -> str:
 
     table("", data)
     return "\n".join(lines) + "\n"
+
+
+def test_reference_arch_hinges_from_mortar_states():
+    """The reference case (three rings, sand between them, lime-mortar joints) traced
+    over its peak: its hinges, read from the openings relative to the ring thickness and
+    the mortar's state (cracked at the opening end), form the four-hinge mechanism of a
+    load at quarter span through all three rings — under the load and at the far
+    springing opening at the intrados, between them and near the near springing at the
+    extrados."""
+    import tomllib
+
+    from masonry_fdem.assessment.case import EXAMPLE_CASE
+
+    data = tomllib.loads(EXAMPLE_CASE)
+    data["analysis"]["limit_analysis"] = False
+    res = assess(load_case(data, name="reference"), write=False, progress=False)
+    hinges = [e for e in res.events if e.kind == "hinge"]
+    print("\n" + "; ".join(f"{e.joint} {e.side} s={e.s:.2f} at {e.load / 1e3:.2f} kN"
+                           for e in hinges))
+    assert res.status.status is Status.PEAK_PASSED
+    # cluster the hinges by position along the arch
+    zones: list[list] = []
+    for e in sorted(hinges, key=lambda e: e.s):
+        if zones and e.s - zones[-1][-1].s < 0.06:
+            zones[-1].append(e)
+        else:
+            zones.append([e])
+    assert len(zones) == 4, [[(e.joint, round(e.s, 2)) for e in z] for z in zones]
+    sides = [{e.side for e in z} for z in zones]
+    assert sides == [{"extrados"}, {"intrados"}, {"extrados"}, {"intrados"}]
+    s_mid = [float(np.mean([e.s for e in z])) for z in zones]
+    assert 0.0 < s_mid[0] < 0.25 < s_mid[1] < 0.5 < s_mid[2] < 1.0
+    assert s_mid[3] > 0.95  # the far springing
+    # every zone through the three rings
+    assert all({e.joint.split()[1] for e in z} == {"0", "1", "2"} for z in zones)

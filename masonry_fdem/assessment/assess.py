@@ -29,10 +29,15 @@ CASE.toml`` on the command line):
    (``max_displacement``) or *load reached* (``max_load`` carried): no collapse load, the
    largest load carried is a lower bound of it;
 5. after every converged step the opening of every radial joint (springings included) at
-   its two ends, beyond the self-weight state: an end opens past ``hinge_opening`` [m]
-   while the other stays closed: a hinge (its side, intrados or extrados, named); both
-   ends open: the joint has separated. The first load at which each joint does so is the
-   hinge sequence.
+   its two ends, beyond the self-weight state, and the state of its mortar: an end is
+   open when it has opened by more than ``hinge_opening`` times the joint's length (the
+   ring thickness; 1e-4 by default) and, for a bonded joint, its mortar there has
+   cracked (the tensile or shear strength exceeded at the integration point nearest that
+   end: status *softening*, *open* or *sliding*, or the joint handed over to the
+   contact; an elastic opening of intact mortar is no hinge). One end open, the other
+   not: a hinge (its side, intrados or extrados, named); both ends open: the joint has
+   separated. Mortar crushed at a joint is an event of its own (*crushed*). The first
+   load at which each joint does so is the hinge sequence.
 
 Every output goes to one run folder, written only when the run is complete (the files
 are assembled in a hidden sibling folder and moved in at the end; a run that fails
@@ -77,10 +82,12 @@ class JointEvent:
         order: 1 for the first joint to open, 2 for the next, ...
         joint: ``"ring k joint j"`` (joint j starts voussoir j; 0 and n: the springings).
         blocks: the two blocks.
-        kind: "hinge" or "separation".
-        side: "intrados" or "extrados" (hinge: the side that opens), "" (separation).
+        kind: "hinge", "separation" or "crushed" (the mortar crushed at an end).
+        side: "intrados" or "extrados" (hinge: the side that opens; crushed: the crushed
+            side), "" (separation).
         position: ``(x, y)`` [m] of the hinge, the end the blocks rotate about (the
-            closed one, as the hinges of limit analysis); separation: the midpoint.
+            closed one, as the hinges of limit analysis); crushed: the crushed end;
+            separation: the midpoint.
         s: the position along the arch, 0 left springing, 0.5 crown, 1 right springing.
         load: the load [N] of the first converged step with the joint open.
         displacement: the load-line displacement [m] then.
@@ -256,9 +263,9 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
 
 
 class _JointMonitor:
-    """Openings of the radial joints at their two ends (collective)."""
+    """Openings and mortar states of the radial joints at their two ends (collective)."""
 
-    def __init__(self, case: ArchCase, model):
+    def __init__(self, case: ArchCase, model, joints=None):
         from masonry_fdem.solvers.limit_analysis import find_interfaces
 
         layout = case.layout()
@@ -296,6 +303,22 @@ class _JointMonitor:
                     self.node[k, e, side] = own[int(np.argmin(d))]
         self.base = np.zeros((n, 2))
         self.side = [self._intrados_end(k) for k in range(n)]
+        self.length = np.linalg.norm(self.ends[:, 1] - self.ends[:, 0], axis=1)
+        # the mortar's integration point of each joint nearest each end, and its
+        # segment (-1: a dry joint)
+        self.joints = joints
+        self.point = -np.ones((n, 2), dtype=np.int64)
+        if joints is not None and joints.n_segments:
+            sb = joints.seg_blocks[joints.q_seg]
+            xp = joints.point_positions()
+            for k, (_, _, _, ba, bb) in enumerate(self.rows):
+                mine = np.flatnonzero(((sb[:, 0] == ba) & (sb[:, 1] == bb))
+                                      | ((sb[:, 0] == bb) & (sb[:, 1] == ba)))
+                if mine.size == 0:
+                    continue
+                for e in range(2):
+                    d = np.linalg.norm(xp[mine] - self.ends[k, e], axis=1)
+                    self.point[k, e] = mine[int(np.argmin(d))]
 
     def _intrados_end(self, k: int) -> int:
         """0 or 1: the end of joint k nearer the arch's centre of curvature."""
@@ -315,17 +338,36 @@ class _JointMonitor:
         rel = du[:, :, 1, :] - du[:, :, 0, :]
         return np.einsum("kej,kj->ke", rel, self.normal) - self.base
 
-    def classify(self, tol: float) -> tuple[list[tuple[int, str, str]], np.ndarray]:
-        """``(row, kind, side)`` of the joints open beyond ``tol`` [m], and the openings."""
+    def classify(self, ratio: float) -> tuple[list[tuple[int, str, str]], np.ndarray]:
+        """``(row, kind, side)`` of the joints that are hinges, separated or crushed (see
+        the module doc: an end opened by more than ``ratio`` × the joint's length, its
+        mortar cracked through), and the openings [m]."""
+        from masonry_fdem.interactions.joints.joints import JOINT_STATES
+
         out = []
         op = self.openings()
+        opened = op > ratio * self.length[:, None]
+        crushed = np.zeros(op.shape, dtype=bool)
+        if self.joints is not None and self.joints.n_segments:
+            st = self.joints.point_status()  # collective
+            has = self.point >= 0
+            pt = np.where(has, self.point, 0)
+            # cracked: the tensile (or shear) strength exceeded there — softening, open or
+            # sliding — or the joint handed over to the contact
+            cracked = (st >= JOINT_STATES.index("softening")) & (
+                st != JOINT_STATES.index("crushed"))
+            cracked |= np.repeat(self.joints.released, 2)
+            opened &= ~has | cracked[pt]
+            crushed = has & (st[pt] == JOINT_STATES.index("crushed"))
         for k in range(len(self.rows)):
-            o = op[k]
-            if o.min() > tol:
+            if opened[k].all():
                 out.append((k, "separation", ""))
-            elif o.max() > tol:
-                end = int(np.argmax(o))
+            elif opened[k].any():
+                end = int(np.argmax(np.where(opened[k], op[k], -np.inf)))
                 out.append((k, "hinge", "intrados" if end == self.side[k] else "extrados"))
+            elif crushed[k].any():
+                end = int(np.argmax(crushed[k]))
+                out.append((k, "crushed", "intrados" if end == self.side[k] else "extrados"))
         return out, op
 
     def event(self, k: int, kind: str, side: str, order: int, load: float,
@@ -334,6 +376,8 @@ class _JointMonitor:
         _, label, blocks, _, _ = self.rows[k]
         if kind == "hinge":
             pos = self.ends[k, int(np.argmin(opening))]
+        elif kind == "crushed":
+            pos = self.ends[k, self.side[k] if side == "intrados" else 1 - self.side[k]]
         else:
             pos = self.ends[k].mean(axis=0)
         a = self.case.arch
@@ -390,7 +434,7 @@ def assess(
         limit_load = None
 
     model, inter, anchors = build_model(case, comm)
-    monitor = _JointMonitor(case, model)
+    monitor = _JointMonitor(case, model, next((i for i in inter if i.name == "joints"), None))
     points = case.load_points()
     bar = ProgressBar(f"{case.name}", comm=comm,
                       force=bool(progress)) if progress is not False else None
@@ -450,7 +494,7 @@ def assess(
     monitor.base = monitor.openings() + monitor.base
     loads, disps, iters = [0.0], [0.0], [it0]
     events: list[JointEvent] = []
-    seen: set[int] = set()
+    seen: set[tuple[int, str]] = set()  # (joint, kind) already in the sequence
     state: dict[str, Any] = {"open": [], "anchors": []}
     anchor_peaks: dict[str, dict] = {}  # per anchor: its largest bar force over the run
 
@@ -475,13 +519,13 @@ def assess(
                     pk.update(force_max=a["force_max"], displacement=float(disp),
                               load=float(load))
         for k, kind, side in opened:
-            if k not in seen:
-                seen.add(k)
+            if (k, kind) not in seen:
+                seen.add((k, kind))
                 events.append(monitor.event(k, kind, side, len(events) + 1, load, disp,
                                             op[k]))
         if bar is not None:
             bar.update(load / scale, f"{load / 1e3:8.2f} kN  {disp * 1e3:7.3f} mm  "
-                       f"{len(seen)} joints open")
+                       f"{len({k for k, _ in seen})} joints open")
         if callback is not None:
             callback({"load": load, "displacement": disp, "iterations": iterations})
 

@@ -77,8 +77,10 @@ Schema (``*``: required):
     (200000); ``output`` run folder ("runs/<case file stem>"; relative to the working
     directory); ``refinements`` halvings of a load increment that finds no equilibrium
     before the run stalls, *not converged* (4: a stall is no collapse load, its last load
-    a lower bound); ``hinge_opening`` [m] opening (beyond the
-    self-weight state) at which an end of a joint counts as open (1e-5); ``penalty_factor``
+    a lower bound); ``hinge_opening`` opening (beyond the
+    self-weight state) at which an end of a joint counts as open, as a fraction of the
+    joint's length, the ring thickness (1e-4; a bonded joint's mortar must have cracked
+    there too); ``penalty_factor``
     of the block contact at dry joints, × E/h (20); displacement control stops, *peak
     passed* (the peak is the collapse load), once the load has stayed below the peak for
     ``post_peak_steps`` (3) steps, or fallen below (1 − ``post_peak_drop``) (0.2) of it;

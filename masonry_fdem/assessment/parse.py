@@ -496,7 +496,7 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         an.integer("max_iterations", 200_000, ge=1),
         Path(an.string("output", f"runs/{name}") or "."),
         an.integer("refinements", 4, ge=0),
-        an.number("hinge_opening", 1e-5, gt=0.0),
+        an.number("hinge_opening", 1e-4, gt=0.0),
         an.number("penalty_factor", 20.0, gt=0.0),
         an.integer("post_peak_steps", 3, ge=1),
         an.number("post_peak_drop", 0.2, gt=0.0),

@@ -138,7 +138,7 @@ class AnalysisSpec:
     max_iterations: int
     output: Path
     refinements: int = 4
-    hinge_opening: float = 1e-5
+    hinge_opening: float = 1e-4
     penalty_factor: float = 20.0
     post_peak_steps: int = 3
     post_peak_drop: float = 0.2

@@ -536,6 +536,18 @@ class Joints(Interaction):
             out[idx] = vals
         return out
 
+    def point_status(self) -> np.ndarray:
+        """(n_points,) committed status of each integration point, two per segment in
+        segment order (codes: :data:`JOINT_STATES`; collective)."""
+        return self._gather([JK.S_STATUS])[:, 0].astype(np.int64)
+
+    def point_positions(self) -> np.ndarray:
+        """(n_points, 2) reference positions [m] of the integration points (on side A)."""
+        x = self.model.blocks.x
+        a = self.g_ipa
+        xi = self.g_xia[:, None]
+        return (1.0 - xi) * x[a[:, 0]] + xi * x[a[:, 1]]
+
     def status(self) -> np.ndarray:
         """(n_segments,) worst status of each segment (codes: :data:`JOINT_STATES`)."""
         st = self._gather([JK.S_STATUS])[:, 0].reshape(-1, 2).max(axis=1).astype(np.int64)
