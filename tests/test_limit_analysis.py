@@ -304,3 +304,164 @@ def test_limit_analysis_input_errors():
     apart = BlockLayout((rectangle(0, 0, 1, 1), rectangle(2, 0, 3, 1)), ("s", "s"), ("a", "b"))
     with pytest.raises(ValueError, match="no interfaces"):
         limit_analysis(apart, **{**kw, "supports": "a", "live_loads": []})
+    with pytest.raises(ValueError, match="friction must be >= 0"):
+        limit_analysis(lay, **{**kw, "friction": lambda a, b, mid: -0.1})
+
+
+def _stack(mu_base: float, mu_top: float, b: float = 1.0, h: float = 0.25) -> BlockLayout:
+    """Two b x h blocks stacked on a fixed base: "lower" on (0, 0), "upper" on (0, h)."""
+    return BlockLayout(
+        (rectangle(-1.0, -0.5, b + 1.0, 0.0), rectangle(0.0, 0.0, b, h),
+         rectangle(0.0, h, b, 2.0 * h)),
+        ("stone", "stone", "stone"), ("base", "lower", "upper"))
+
+
+def test_friction_per_interface():
+    """Two blocks (b = 1, h = 0.25, w = 0.3, weight W = ρ b h w g = 1471.5 N each) stacked
+    on a base; a horizontal load P = 1 N on the upper block at mid-height of its left side.
+    Overturning needs P = W b / h = 4 W or more, so sliding governs: of the upper block
+    on the lower one, λ = μ_top W, or of both on the base, λ = μ_base · 2 W.
+
+    μ given per interface by a function of the block names and the midpoint:
+    μ_base = 0.2, μ_top = 0.5: base sliding, λ = 0.4 W = 588.6; μ_base = 0.5, μ_top = 0.2:
+    top sliding, λ = 0.2 W = 294.3. The midpoints passed are those of the two interfaces.
+    """
+    b, h, w = 1.0, 0.25, 0.3
+    weight = RHO * b * h * w * G
+    for mu_base, mu_top, expected, sliding in ((0.2, 0.5, 0.4 * weight, ("base", "lower")),
+                                               (0.5, 0.2, 0.2 * weight, ("lower", "upper"))):
+        seen = {}
+
+        def mu(a, bb, mid, mu_base=mu_base, mu_top=mu_top, seen=seen):
+            seen[(a, bb)] = tuple(mid)
+            return mu_base if "base" in (a, bb) else mu_top
+
+        res = limit_analysis(_stack(mu_base, mu_top), density=RHO, width=w, g=G,
+                             supports="base", friction=mu,
+                             live_loads=[((0.0, 1.5 * h), (1.0, 0.0))])
+        assert res.status == LimitStatus.COLLAPSE
+        assert res.load_factor == pytest.approx(expected, rel=1e-6)
+        assert [hg.blocks for hg in res.hinges if hg.kind == HingeKind.SLIDING] == [sliding]
+        assert seen == {("base", "lower"): pytest.approx((0.5 * b, 0.0)),
+                        ("lower", "upper"): pytest.approx((0.5 * b, h))}
+
+
+# The reference case of masonry_fdem.assessment.examples: semicircular, span 3 m, three
+# rings of 0.11 m (intrados radius 1.5 m), voussoirs [26, 28, 30] with half-voussoir
+# stagger, abutments 0.5 x 0.6 m; brick 2000 kg/m^3; the spreader ends at quarter span.
+def _three_ring(**kw) -> BlockLayout:
+    args = dict(span=3.0, ring_thickness=0.11, voussoirs=[26, 28, 30], rings=3, stagger=0.5,
+                abutment_height=0.5, abutment_width=0.6)
+    return arch_layout(**{**args, **kw})
+
+
+def _ring_friction(mu_joint: float, mu_ring: float):
+    """μ of the radial joints (springings included) and of the interfaces between rings."""
+
+    def mu(a: str, b: str, mid) -> float:
+        ra, rb = (n.split(":")[1] if n.startswith("voussoir") else None for n in (a, b))
+        return mu_ring if None not in (ra, rb) and ra != rb else mu_joint
+
+    return mu
+
+
+def _extrados(lay: BlockLayout, x: float) -> np.ndarray:
+    """The highest point of the voussoirs' outlines on the vertical line through x."""
+    best = -math.inf
+    for poly, name in zip(lay.polygons, lay.names, strict=True):
+        a, b = poly, np.roll(poly, -1, axis=0)
+        for (x0, y0), (x1, y1) in zip(a, b, strict=True):
+            if name.startswith("voussoir") and min(x0, x1) <= x <= max(x0, x1) and x0 != x1:
+                best = max(best, y0 + (x - x0) * (y1 - y0) / (x1 - x0))
+    return np.array([x, best])
+
+
+def _la(lay: BlockLayout, friction, live: bool = True):
+    """Self-weight and 1 N shared by the ends of a 0.1 m spreader at quarter span."""
+    loads = [(_extrados(lay, x), (0.0, -0.5)) for x in (-0.8, -0.7)]
+    return limit_analysis(lay, density=RHO, width=1.0, g=G, supports="abutment:*",
+                          live_loads=loads if live else [], friction=friction,
+                          max_load_factor=490332.5)
+
+
+def test_three_ring_arch_cannot_carry_its_weight_with_friction_06():
+    """Issue #21: the LP of the reference case is infeasible at μ = 0.6. That is the
+    answer, not a bug: each 0.11 m ring alone is thinner than the minimum for a
+    semicircular arch under self-weight (t / R = 0.11 / 1.555 = 0.071 at the inner ring's
+    centre line, Heyman's minimum 0.1075), so the rings stand only by acting together,
+    which needs shear across the ring interfaces, and with no bond the friction needed
+    there is more than 0.6.
+
+    * one ring of 0.11 m alone: infeasible even with μ = inf (friction factor inf);
+    * one ring of 0.33 m at μ = 0.6: collapses under a live load (it stands);
+    * the three rings at μ = 0.6 with no sliding between the rings (μ = inf there): stand;
+    * the three rings at μ = 0.6 everywhere: infeasible. The mechanism returned is the
+      proof, checked here independently of the LP: at both ends of every interface the
+      blocks separate at least μ times as fast as they slide (no dissipation) while the
+      self-weight does positive work, so by virtual work no equilibrium with
+      ``N >= 0, |S| <= μ N`` exists (whatever the flow rule). The friction factor
+      ~1.227 (μ ≈ 0.736) is bracketed by a feasible and an infeasible LP;
+    * radial joints at 0.7, sand 0.5 between the rings: infeasible (HiGHS' simplex ends
+      there with "model status unknown"; the interior-point method decides it).
+    """
+    inner = arch_layout(span=3.0, ring_thickness=0.11, voussoirs=26, abutment_height=0.5)
+    res = _la(inner, math.inf, live=False)
+    assert res.status == LimitStatus.INFEASIBLE and math.isinf(res.friction_factor)
+    assert "no friction coefficient would help" in res.explanation
+
+    one = arch_layout(span=3.0, ring_thickness=0.33, voussoirs=28, abutment_height=0.5,
+                      abutment_width=0.6)
+    res = _la(one, 0.6)
+    assert res.status == LimitStatus.COLLAPSE and 5e3 < res.load_factor < 5e4  # 14.4 kN
+
+    lay = _three_ring()
+    assert _la(lay, _ring_friction(0.6, math.inf)).status != LimitStatus.INFEASIBLE
+
+    res = _la(lay, 0.6)
+    assert res.status == LimitStatus.INFEASIBLE
+    assert math.isnan(res.load_factor) and not res.hinges
+    assert len(res.dead_load_mechanism) > 0
+    # the proof, by hand: relative velocities at the interface ends, work of the weight
+    vel, itf = res.block_velocities, res.interfaces
+    cent = np.array([polygon_centroid(p) for p in lay.polygons])
+    weight = np.array([RHO * polygon_area(p) * G for p in lay.polygons])
+
+    def moving(blk, x):
+        (u, v, om), c = vel[blk], cent[blk]
+        return np.array([u - om * (x[1] - c[1]), v + om * (x[0] - c[0])])
+
+    for a, b, start, end in zip(itf.block_a, itf.block_b, itf.start, itf.end, strict=True):
+        t = (end - start) / np.linalg.norm(end - start)
+        n = np.array([t[1], -t[0]])
+        for x in (start, end):
+            rel = moving(b, x) - moving(a, x)
+            assert rel @ n >= 0.6 * abs(rel @ t) - 1e-9
+    assert np.all(vel[res.fixed] == 0.0)
+    assert -np.dot(weight, vel[:, 1]) > 100.0  # [W] at a fastest vertex speed of 1 m/s
+    assert res.friction_factor == pytest.approx(1.227, abs=0.005)
+    assert _la(lay, 0.6 * res.friction_factor, live=False).status != LimitStatus.INFEASIBLE
+    assert _la(lay, 0.6 * res.friction_factor / 1.01,
+               live=False).status == LimitStatus.INFEASIBLE
+    assert "cannot carry their own dead load" in res.explanation
+    assert f"{res.friction_factor:.3g} times larger" in res.explanation
+
+    res = _la(lay, _ring_friction(0.7, 0.5))
+    assert res.status == LimitStatus.INFEASIBLE
+    assert res.friction_factor == pytest.approx(1.254, abs=0.01)
+
+
+def test_bonded_rings_act_as_one_ring():
+    """Three 0.11 m rings with aligned radial joints (stagger 0, 28 voussoirs each) and no
+    sliding between the rings (μ = inf there, 0.6 elsewhere) carry the quarter-span load of
+    one 0.33 m ring with the same 28 joints: the ring interfaces are found and oriented
+    right. Not more (the blocks of a radial section are the monolithic voussoir cut in
+    three), and at most a little less: the rings may still separate (no tension).
+    """
+    one = arch_layout(span=3.0, ring_thickness=0.33, voussoirs=28, abutment_height=0.5,
+                      abutment_width=0.6)
+    three = _three_ring(voussoirs=28, stagger=0.0)
+    mono = _la(one, 0.6)
+    rings = _la(three, _ring_friction(0.6, math.inf))
+    assert mono.status == rings.status == LimitStatus.COLLAPSE
+    assert rings.load_factor <= mono.load_factor * (1.0 + 1e-6)
+    assert rings.load_factor == pytest.approx(mono.load_factor, rel=0.01)

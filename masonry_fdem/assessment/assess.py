@@ -124,7 +124,8 @@ class Assessment:
         events: the hinge sequence.
         hinges_at_collapse: the joints open at the peak load.
         limit_load: the limit-analysis collapse load (None if not run), ``limit_status``
-            its LP status and ``limit_hinges`` its hinges (``(blocks, position)``).
+            its LP status, ``limit_explanation`` its outcome in plain words and
+            ``limit_hinges`` its hinges (``(blocks, position)``).
         folder, report: the run folder and ``report.md`` (None if not written).
         cells, elapsed: the mesh size and the wall time [s].
         anchors: per anchor at the peak load (see :func:`anchor_state`); empty
@@ -149,6 +150,7 @@ class Assessment:
     hinges_at_collapse: list[JointEvent]
     limit_load: float | None = None
     limit_status: str | None = None
+    limit_explanation: str = ""
     limit_hinges: list[tuple[tuple[str, str], tuple[float, float]]] = field(
         default_factory=list)
     folder: Path | None = None
@@ -427,8 +429,16 @@ def assess(
     an = case.analysis
     la = None
     if an.limit_analysis:
-        la = case.limit_analysis() if comm.rank == 0 else None
-        la = comm.bcast(la, root=0)
+        if comm.rank == 0:
+            # no bond in the LP: joints slide at `friction`, a friction-only layer that the
+            # FDEM model has as a joint (the sand between rings) at its own tan_phi
+            dry = [(on, jm.tan_phi) for on, jm in case.joint_rules()
+                   if jm is not None and not jm.bonded and jm.kn is not None]
+            la = case.limit_analysis(friction=lambda _a, _b, mid: next(
+                (mu for on, mu in dry if on(mid)), an.friction))
+            if la.status == "infeasible":
+                log.warning("%s: limit analysis: %s", case.name, la.explanation)
+        la = comm.bcast(la if comm.rank == 0 else None, root=0)
     limit_load = float(la.load_factor) if la is not None else None
     if limit_load is not None and not math.isfinite(limit_load):
         limit_load = None
@@ -672,6 +682,7 @@ def assess(
         loads=np.array(loads), displacements=np.array(disps), iterations=iters,
         events=events, hinges_at_collapse=hinges_now, limit_load=limit_load,
         limit_status=None if la is None else str(la.status),
+        limit_explanation="" if la is None else la.explanation,
         limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
         anchor_length=0.0 if anchors is None else anchors.total_length,

@@ -170,9 +170,10 @@ def _report(case, res, mag: float) -> str:
         else:
             lines.append(f"| FDEM lower bound / limit analysis | ≥ {res.bound_ratio:.3f} |")
     elif res.limit_status == "infeasible":
-        lines.append(f"| limit analysis | infeasible: the rigid blocks, with friction "
-                     f"{case.analysis.friction:g} and no bond, find no equilibrium even "
-                     "without the live load (the FDEM model has the mortar's bond) |")
+        lines.append(f"| limit analysis | infeasible — {res.limit_explanation or 'no '
+                     'equilibrium even without the live load'} (friction "
+                     f"{case.analysis.friction:g} at the radial joints, the ring "
+                     "interfaces' own; the FDEM model has the mortar's bond) |")
     elif res.limit_status:
         lines.append(f"| limit analysis | {res.limit_status} |")
     lines.append(f"| solver | {_solver_text(case)} |")

@@ -23,10 +23,12 @@ two blocks ``a < b`` (indices in the layout). Its unit tangent ``t`` runs along 
 two non-negative end forces the resultant stays between the ends: a joint opens into a
 hinge at one end instead of carrying tension.
 
-Friction. For finite ``μ`` the end force is written as ``f+ (n + μ t) + f- (n - μ t)`` with
-``f+, f- >= 0`` (the two edges of the 2D friction cone), so ``N = f+ + f-`` and
-``S = μ (f+ - f-)``: the same constraints as above with no inequality rows, which the
-simplex solves in far fewer iterations. ``μ = inf`` leaves ``S`` free.
+Friction. ``μ`` may differ from interface to interface (e.g. mortar joints and the sand
+between the rings of an arch). For finite ``μ`` the end force is written as
+``f+ (n + μ t) + f- (n - μ t)`` with ``f+, f- >= 0`` (the two edges of the 2D friction
+cone), so ``N = f+ + f-`` and ``S = μ (f+ - f-)``: the same constraints as above with no
+inequality rows, which the simplex solves in far fewer iterations. ``μ = inf`` leaves
+``S`` free.
 
 Equilibrium. Unknowns are ``q = (N_1, S_1, N_2, S_2)`` per interface and ``λ``. Each block
 that is not a support gives three rows, the force components ``F_x, F_y`` and the moment
@@ -47,7 +49,16 @@ and joints have no cohesion or tensile strength. Interfaces are found only betwe
 touching, non-overlapping outlines: the shared edges must be collinear within ``tol``.
 When several mechanisms share the collapse load (degenerate duals, common in multi-ring
 arches and walls) the one reported is the solver's basic solution, which may combine
-them. An infeasible LP (the dead load alone collapses the structure) reports no mechanism.
+them.
+
+Infeasibility. If no ``λ >= 0`` is admissible, the dead load alone has no equilibrium
+(if it had one, ``λ = 0`` would be admissible). Equilibrium is necessary whatever the flow
+rule, so this holds for non-associative friction too: the structure as modelled cannot
+stand as rigid blocks. The result then gives the proof, a mechanism in which the dead
+load does positive work and no interface dissipates (a Farkas certificate of the LP, the
+one with the least total velocity), and the factor on every friction coefficient with
+which it would stand (bisection on feasibility, which grows with friction; a dozen small
+LPs).
 
 Everything runs in serial on each rank: under MPI every rank solves the same small LP.
 """
@@ -57,14 +68,14 @@ from __future__ import annotations
 import fnmatch
 import logging
 import time
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import linprog
-from scipy.sparse import coo_matrix
+from scipy.sparse import coo_matrix, csr_matrix, hstack, vstack
 from scipy.spatial import cKDTree
 
 from masonry_fdem.constants import G
@@ -87,6 +98,8 @@ log = logging.getLogger(__name__)
 _MOTION_TOL = 1e-6
 # λ within this relative distance of λ_max counts as "no mechanism below the cap".
 _CAP_TOL = 1e-9
+# [s] for each HiGHS method but the last one tried (see _solve)
+_LP_TIME_LIMIT = 30.0
 
 Load = tuple[Sequence[float], Sequence[float]]
 
@@ -181,10 +194,19 @@ class LimitResult:
         hinges: interfaces with relative motion in the mechanism (empty unless collapse).
         block_velocities: ``(n_blocks, 3)`` virtual velocities ``(u, v, ω)`` of the block
             centroids in the mechanism (``[-], [-], [1/m]``, fastest vertex at speed 1; zero
-            for supports and unless collapse).
+            for supports and for no_mechanism); for infeasible, those of
+            ``dead_load_mechanism``.
         interfaces: the interfaces of the LP (those between two supports are left out).
         names: block names, in layout order.
         fixed: ``(n_blocks,)`` True for supports.
+        dead_load_mechanism: infeasible only: the interfaces with relative motion in a
+            mechanism in which the dead load does positive work while no interface
+            dissipates (each end opens at least ``μ`` times as fast as it slides): the proof
+            that the dead load has no equilibrium. Empty otherwise.
+        friction_factor: infeasible only: the least factor on every interface's friction
+            coefficient with which the dead load would have an equilibrium (to 0.1 %,
+            rounded up); inf if none would (the blocks fail even with no sliding, e.g. an
+            arch thinner than its minimum thickness). NaN otherwise.
     """
 
     load_factor: float
@@ -195,6 +217,31 @@ class LimitResult:
     interfaces: Interfaces
     names: tuple[str, ...]
     fixed: np.ndarray
+    dead_load_mechanism: list[Hinge] = field(default_factory=list)
+    friction_factor: float = float("nan")
+
+    @property
+    def explanation(self) -> str:
+        """The outcome in one or two plain sentences (for reports and logs)."""
+        if self.status == LimitStatus.NO_MECHANISM:
+            return (f"no mechanism up to the load factor cap {self.load_factor:.6g}: the "
+                    "rigid blocks carry it")
+        if self.status == LimitStatus.COLLAPSE:
+            return (f"collapse at the load factor {self.load_factor:.6g} by "
+                    f"{_motion_text(self.hinges)}")
+        text = ("no equilibrium even without the live load: the rigid blocks, with no "
+                "tension, no bond and the friction given, cannot carry their own dead load")
+        moving = int(np.count_nonzero(np.abs(self.block_velocities).max(axis=1) > _MOTION_TOL))
+        if self.dead_load_mechanism:
+            text += (f"; they collapse under it by {_motion_text(self.dead_load_mechanism)} "
+                     f"({moving} of {int((~self.fixed).sum())} blocks move)")
+        if np.isinf(self.friction_factor):
+            text += ("; no friction coefficient would help: they fail even with no sliding "
+                     "anywhere")
+        elif np.isfinite(self.friction_factor):
+            text += (f"; they would stand with every friction coefficient "
+                     f"{self.friction_factor:.3g} times larger")
+        return text
 
     @property
     def thrust_points(self) -> np.ndarray:
@@ -380,6 +427,23 @@ def _fixed_blocks(layout: BlockLayout, supports: str | Sequence[str]) -> np.ndar
     return fixed
 
 
+def _interface_friction(friction: float | Callable[[str, str, np.ndarray], float],
+                        itf: Interfaces, names: Sequence[str]) -> np.ndarray:
+    """``(n_int,)`` friction coefficient of each interface (see :func:`limit_analysis`)."""
+    if callable(friction):
+        mid = 0.5 * (itf.start + itf.end)
+        mu = np.array([float(friction(names[a], names[b], mid[i]))
+                       for i, (a, b) in enumerate(zip(itf.block_a, itf.block_b, strict=True))])
+    else:
+        mu = np.full(itf.size, float(friction))
+    bad = ~(mu >= 0.0)  # also NaN; inf is allowed
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"friction must be >= 0, got {mu[k]} at the interface of "
+                         f"{names[itf.block_a[k]]!r} and {names[itf.block_b[k]]!r}")
+    return mu
+
+
 def _add_point_load(rows: np.ndarray, slot: np.ndarray, centroids: np.ndarray, block: int,
                     x: np.ndarray, f: np.ndarray) -> None:
     """Add force ``f`` at ``x`` to the (F_x, F_y, M) rows of ``block`` (if it is free)."""
@@ -399,7 +463,7 @@ def limit_analysis(
     live_loads: Sequence[Load] = (),
     dead_loads: Sequence[Load] = (),
     live_acceleration: Sequence[float] | None = None,
-    friction: float = 0.6,
+    friction: float | Callable[[str, str, np.ndarray], float] = 0.6,
     g: float = G,
     max_load_factor: float = 1e6,
     tol: float = 1e-9,
@@ -426,23 +490,30 @@ def limit_analysis(
             free block, at its centroid, to the live load (e.g. ``(g, 0)`` makes ``λ`` the
             horizontal acceleration at collapse in units of g, as on a tilting table).
         friction: Coulomb coefficient ``μ`` of every interface, ``>= 0`` (``inf``: no
-            sliding).
+            sliding); or a function ``friction(name_a, name_b, midpoint)`` of the names of
+            the two blocks of an interface (``a`` first in the layout) and its midpoint
+            ``(x, y)`` [m] returning its ``μ``: joints of different materials (e.g. the sand
+            between the rings of a multi-ring arch).
         g: gravitational acceleration [m/s^2], acting in ``-y``.
         max_load_factor: upper bound on ``λ``; reaching it gives status "no_mechanism".
         tol: geometric tolerance relative to the layout size (interfaces, load points).
 
     Returns:
-        The load factor, status, interface forces and the mechanism.
+        The load factor, status, interface forces and the mechanism; for "infeasible" the
+        mechanism by which the dead load alone collapses and the factor on the friction
+        that would let it stand (see :class:`LimitResult`, ``explanation``).
 
     Raises:
         ValueError: bad parameters, a support pattern matching no block, a load point in no
             block, no interfaces, or a free block touching no other block.
+        RuntimeError: HiGHS finds neither a solution nor infeasibility (by the dual
+            simplex, then by the interior-point method).
     """
     if not (np.isfinite(width) and width > 0.0):
         raise ValueError(f"width must be positive, got {width}")
     if not (np.isfinite(g) and g >= 0.0):
         raise ValueError(f"g must be >= 0, got {g}")
-    if not (friction >= 0.0):  # also rejects NaN; inf is allowed
+    if not callable(friction) and not (friction >= 0.0):  # also rejects NaN; inf is allowed
         raise ValueError(f"friction must be >= 0, got {friction}")
     if not (np.isfinite(max_load_factor) and max_load_factor > 0.0):
         raise ValueError(f"max_load_factor must be positive, got {max_load_factor}")
@@ -500,18 +571,85 @@ def limit_analysis(
     b_eq = -f_dead * moment_rows / scale_dead
     live_col = f_live * moment_rows / scale_live
 
-    # equilibrium matrix. With finite friction each end force is a non-negative
-    # combination f+ (n + μ t) + f- (n - μ t) of the two edges of its friction cone, so
-    # N = f+ + f-, S = μ (f+ - f-) and the LP has no inequality rows (far fewer simplex
-    # iterations); without friction limit the columns are N n (N >= 0) and S t (S free).
+    # equilibrium matrix (see _equilibrium_matrix) and the λ column
     n_int = itf.size
-    normal, tangent = itf.normal, itf.tangent
-    if np.isfinite(friction):
-        generators = (normal + friction * tangent, normal - friction * tangent)
-        col_bounds = [(0.0, None)] * 4
-    else:
-        generators = (normal, tangent)
-        col_bounds = [(0.0, None), (None, None)] * 2
+    mu = _interface_friction(friction, itf, layout.names)
+    n_rows = 3 * free.size
+    a_dead, col_bounds = _equilibrium_matrix(itf, mu, slot, centroids, size, n_rows)
+    a_eq = hstack([a_dead, coo_matrix(live_col[:, None])], format="csr")
+    n_var = 4 * n_int + 1
+
+    lam_cap = max_load_factor * scale_live / scale_dead
+    bounds = col_bounds + [(0.0, lam_cap)]
+    c = np.zeros(n_var)
+    c[-1] = -1.0
+    res = _solve(c, A_eq=a_eq, b_eq=b_eq, bounds=bounds)
+    log.debug("limit analysis: %d free blocks, %d interfaces, LP %s in %.3g s", free.size,
+              n_int, res.status, time.perf_counter() - t0)
+
+    names = layout.names
+    velocities = np.zeros((nb, 3))
+    if res.status == 2:
+        # the dead load alone has no equilibrium (if it had one, λ = 0 would be
+        # admissible): the mechanism that proves it, and how much more friction would let
+        # the structure stand
+        y = _dead_load_mechanism(a_dead, b_eq, col_bounds)
+        mechanism: list[Hinge] = []
+        if y is None:
+            log.warning("limit analysis: the LP is infeasible but no collapse mechanism of "
+                        "the dead load was found (numerical trouble?)")
+        else:
+            velocities[free] = y.reshape(free.size, 3) * [1.0, 1.0, 1.0 / size]
+            velocities /= _fastest_vertex(layout, centroids, velocities, free) or 1.0
+            mechanism = _mechanism(itf, centroids, velocities, names)
+        factor = _friction_factor(itf, mu, slot, centroids, size, n_rows, b_eq)
+        log.debug("limit analysis: infeasible; %d interfaces move in the dead-load mechanism,"
+                  " friction factor needed %.4g (%.3g s)", len(mechanism), factor,
+                  time.perf_counter() - t0)
+        return LimitResult(float("nan"), LimitStatus.INFEASIBLE, np.full((n_int, 4), np.nan),
+                           [], velocities, itf, names, fixed, dead_load_mechanism=mechanism,
+                           friction_factor=factor)
+    if res.status != 0:
+        raise RuntimeError(f"limit analysis LP failed: {res.message}")
+
+    lam = float(res.x[-1]) * scale_dead / scale_live
+    x = res.x[:-1].reshape(n_int, 2, 2) * scale_dead  # (interface, end, column)
+    # finite μ: (f+, f-) -> (N, S) = (f+ + f-, μ (f+ - f-)); μ = inf: the columns are (N, S)
+    finite = np.isfinite(mu)
+    cone = np.stack([x[..., 0] + x[..., 1],
+                     np.where(finite, mu, 0.0)[:, None] * (x[..., 0] - x[..., 1])], axis=-1)
+    x = np.where(finite[:, None, None], cone, x)
+    forces = x.reshape(n_int, 4)
+    if res.x[-1] >= lam_cap * (1.0 - _CAP_TOL):
+        return LimitResult(max_load_factor, LimitStatus.NO_MECHANISM, forces, [], velocities,
+                           itf, names, fixed)
+
+    y = np.asarray(res.eqlin.marginals, dtype=np.float64).reshape(free.size, 3)
+    velocities[free] = y * [1.0, 1.0, 1.0 / size]
+    if np.dot(live_col, y.ravel()) < 0.0:  # live loads do positive work
+        velocities = -velocities
+    speed = _fastest_vertex(layout, centroids, velocities, free)
+    if speed > 0.0:
+        velocities /= speed
+    hinges = _mechanism(itf, centroids, velocities, names)
+    return LimitResult(lam, LimitStatus.COLLAPSE, forces, hinges, velocities, itf, names, fixed)
+
+
+def _equilibrium_matrix(itf: Interfaces, mu: np.ndarray, slot: np.ndarray,
+                        centroids: np.ndarray, size: float,
+                        n_rows: int) -> tuple[csr_matrix, list[tuple[float | None, None]]]:
+    """The equilibrium rows of the interface forces and the bounds of their columns.
+
+    Columns ``4 i + 2 k + j``: interface ``i``, end ``k``. With finite friction each end
+    force is a non-negative combination ``f+ (n + μ t) + f- (n - μ t)`` of the two edges of
+    its friction cone, so ``N = f+ + f-``, ``S = μ (f+ - f-)`` and the LP has no inequality
+    rows (far fewer simplex iterations); with ``μ = inf`` the columns are ``N n`` (``N >=
+    0``) and ``S t`` (``S`` free). Rows: ``(F_x, F_y, M / size)`` of each free block.
+    """
+    n_int = itf.size
+    finite = np.isfinite(mu)
+    mu_t = np.where(finite, mu, 0.0)[:, None] * itf.tangent
+    generators = (itf.normal + mu_t, np.where(finite[:, None], itf.normal - mu_t, itf.tangent))
     rows, cols, vals = [], [], []
     for k, ends in enumerate((itf.start, itf.end)):
         for sign, blocks in ((1.0, itf.block_b), (-1.0, itf.block_a)):
@@ -525,50 +663,90 @@ def limit_analysis(
                     rows.append(3 * r[on] + c)
                     cols.append(col[on])
                     vals.append(sign * comp[c][on])
-    n_var = 4 * n_int + 1
-    rows.append(np.arange(3 * free.size))
-    cols.append(np.full(3 * free.size, n_var - 1))
-    vals.append(live_col)
-    a_eq = coo_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(3 * free.size, n_var),
-    ).tocsr()
+    a = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                   shape=(n_rows, 4 * n_int)).tocsr()
+    bounds = [b for f in finite for b in [(0.0, None), (0.0, None) if f else (None, None)] * 2]
+    return a, bounds
 
-    lam_cap = max_load_factor * scale_live / scale_dead
-    bounds = col_bounds * n_int + [(0.0, lam_cap)]
-    c = np.zeros(n_var)
-    c[-1] = -1.0
-    res = linprog(c, A_eq=a_eq, b_eq=b_eq, bounds=bounds, method="highs")
-    log.debug("limit analysis: %d free blocks, %d interfaces, LP %s in %.3g s", free.size,
-              n_int, res.status, time.perf_counter() - t0)
 
-    names = layout.names
-    velocities = np.zeros((nb, 3))
-    if res.status == 2:
-        return LimitResult(float("nan"), LimitStatus.INFEASIBLE, np.full((n_int, 4), np.nan),
-                           [], velocities, itf, names, fixed)
+def _solve(c: np.ndarray, methods: Sequence[str] = ("highs", "highs-ipm"), **lp: object):
+    """``linprog`` by the HiGHS methods in turn until one reaches a verdict (optimal or
+    infeasible). Near the friction at which a structure just stands (multi-ring arches) the
+    dual simplex may end with "model status unknown" (status 4) or cycle, so every method
+    but the last has the time limit :data:`_LP_TIME_LIMIT`; the interior-point method
+    decides those LPs in milliseconds."""
+    res = None
+    for k, method in enumerate(methods):
+        options = {"time_limit": _LP_TIME_LIMIT} if k < len(methods) - 1 else {}
+        res = linprog(c, method=method, options=options, **lp)
+        if res.status in (0, 2):
+            break
+        log.debug("limit analysis: HiGHS (%s): %s", method, res.message)
+    return res
+
+
+def _dead_load_mechanism(a: csr_matrix, b: np.ndarray, bounds: list) -> np.ndarray | None:
+    """The velocities ``y`` (scaled as the rows of ``a``) of a mechanism in which the dead
+    load does positive work and no interface dissipates: a Farkas certificate that
+    ``a x = b`` has no solution within ``bounds``.
+
+    ``a_j · y >= 0`` for each column with ``x_j >= 0`` and ``a_j · y = 0`` for each free
+    column say that every interface end opens at least ``μ`` times as fast as it slides
+    (associative friction: no dissipation), and ``b · y <= -1`` that the dead load does
+    positive work (``b`` is minus the dead load). Of these, the one with the least
+    ``Σ |y|`` (few moving blocks). None if there is none (the LP is feasible after all).
+    """
+    m = a.shape[0]
+    at = a.T.tocsr()
+    nonneg = np.array([lo is not None for lo, _ in bounds])
+    signed = hstack([at, -at], format="csr")  # y = y+ - y-, y+, y- >= 0
+    a_ub = vstack([-signed[np.flatnonzero(nonneg)], csr_matrix(np.r_[b, -b][None, :])],
+                  format="csr")
+    b_ub = np.r_[np.zeros(int(nonneg.sum())), -1.0]
+    free_cols = np.flatnonzero(~nonneg)
+    a_eq = signed[free_cols] if free_cols.size else None
+    b_eq = np.zeros(free_cols.size) if free_cols.size else None
+    res = _solve(np.ones(2 * m), A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=b_eq,
+                 bounds=(0.0, None))
     if res.status != 0:
-        raise RuntimeError(f"limit analysis LP failed: {res.message}")
+        return None
+    return res.x[:m] - res.x[m:]
 
-    lam = float(res.x[-1]) * scale_dead / scale_live
-    x = res.x[:-1].reshape(n_int, 2, 2) * scale_dead  # (interface, end, column)
-    if np.isfinite(friction):
-        x = np.stack([x[..., 0] + x[..., 1], friction * (x[..., 0] - x[..., 1])], axis=-1)
-    forces = x.reshape(n_int, 4)
-    if res.x[-1] >= lam_cap * (1.0 - _CAP_TOL):
-        return LimitResult(max_load_factor, LimitStatus.NO_MECHANISM, forces, [], velocities,
-                           itf, names, fixed)
 
-    y = np.asarray(res.eqlin.marginals, dtype=np.float64).reshape(free.size, 3)
-    velocities[free] = y * [1.0, 1.0, 1.0 / size]
-    if np.dot(live_col, y.ravel()) < 0.0:  # live loads do positive work
-        velocities = -velocities
-    speed = max(float(np.linalg.norm(_vertex_velocities(layout, centroids, velocities, b),
-                                     axis=1).max()) for b in free)
-    if speed > 0.0:
-        velocities /= speed
-    hinges = _mechanism(itf, centroids, velocities, names)
-    return LimitResult(lam, LimitStatus.COLLAPSE, forces, hinges, velocities, itf, names, fixed)
+def _friction_factor(itf: Interfaces, mu: np.ndarray, slot: np.ndarray,
+                     centroids: np.ndarray, size: float, n_rows: int, b: np.ndarray,
+                     rtol: float = 1e-3) -> float:
+    """The least factor on every interface's friction coefficient with which the dead load
+    has an equilibrium (to ``rtol``, rounded up); inf if none has (not even with no
+    sliding anywhere). Equilibrium exists for every larger factor: the friction cones
+    grow with it. The factor returned is one at which an equilibrium was found: an LP
+    that no method decides counts as infeasible."""
+
+    def stands(factor: float) -> bool:
+        scaled = np.where(mu > 0.0, mu * factor, 0.0)
+        a, bounds = _equilibrium_matrix(itf, scaled, slot, centroids, size, n_rows)
+        # close to the critical factor the LPs are nearly degenerate: interior point first
+        res = _solve(np.zeros(a.shape[1]), ("highs-ipm", "highs"), A_eq=a, b_eq=b,
+                     bounds=bounds)
+        return res.status == 0
+
+    if not np.any(mu[np.isfinite(mu)] > 0.0) or not stands(np.inf):
+        return float("inf")
+    lo, hi = 1.0, 2.0
+    while not stands(hi):
+        lo, hi = hi, 2.0 * hi
+        if hi > 1e6:  # only at μ = inf: practically no friction suffices
+            return float("inf")
+    while hi > lo * (1.0 + rtol):
+        mid = np.sqrt(lo * hi)
+        lo, hi = (lo, mid) if stands(mid) else (mid, hi)
+    return float(hi)
+
+
+def _fastest_vertex(layout: BlockLayout, centroids: np.ndarray, velocities: np.ndarray,
+                    free: np.ndarray) -> float:
+    return max(float(np.linalg.norm(_vertex_velocities(layout, centroids, velocities, b),
+                                    axis=1).max()) for b in free)
 
 
 def _point_velocity(centroids: np.ndarray, velocities: np.ndarray, blocks: np.ndarray,
@@ -614,3 +792,13 @@ def _mechanism(itf: Interfaces, centroids: np.ndarray, velocities: np.ndarray,
         hinges.append(Hinge(i, (names[a], names[b]), (float(where[0]), float(where[1])),
                             kind, float(size)))
     return hinges
+
+
+def _motion_text(hinges: Sequence[Hinge]) -> str:
+    """E.g. "a mechanism with 4 hinges, 2 sliding interfaces"."""
+    count = {kind: sum(h.kind == kind for h in hinges) for kind in HingeKind}
+    words = {HingeKind.HINGE: ("hinge", "hinges"),
+             HingeKind.SLIDING: ("sliding interface", "sliding interfaces"),
+             HingeKind.SEPARATION: ("separating interface", "separating interfaces")}
+    parts = [f"{n} {words[k][n != 1]}" for k, n in count.items() if n]
+    return "a mechanism with " + (", ".join(parts) if parts else "no relative motion")
