@@ -561,7 +561,10 @@ def assess(
 
         common = dict(max_displacement=d_max, max_load=ld.max_load or math.inf,
                       peak_drop=an.post_peak_drop, stop_drop=max(0.5, an.post_peak_drop),
-                      max_steps=an.newton_steps, callback=on_point)
+                      max_steps=an.newton_steps, callback=on_point,
+                      # down to 1/1024 of the increment: sliding sand layers and
+                      # stitches switch between stick and slip in steps of ~0.1 µm
+                      min_increment=d_inc / 1024.0)
         # under either control: indirect displacement control of the load-line
         # displacement (equal forces on the spreader's ends, as a spreader beam jacked
         # at its middle gives; dynamic relaxation's "displacement" is a rigid platen)

@@ -721,7 +721,12 @@ class StaticSolver:
         return q
 
     def _arc_increment(self, ds: float, a: np.ndarray, q: np.ndarray, b: float = 0.0,
-                       max_backtracks: int = 6, max_uphill: int = 6
+                       max_backtracks: int = 6, max_uphill: int = 6, *,
+                       damping: np.ndarray | None = None, x_prev: np.ndarray | None = None,
+                       lam_start: float | None = None, commit: bool = True,
+                       ds_scale: float | None = None,
+                       constraint: Callable[[], tuple[float, np.ndarray, float]] | None = None,
+                       ctol: float = 1e-8
                        ) -> tuple[NewtonResult, float]:
         """One increment of a linear path constraint from the committed state: find
         (u, λ) with r(u, λ) = 0 and a·(u − u_c) + b (λ − λ_c) = ds (the bordered Newton
@@ -730,8 +735,20 @@ class StaticSolver:
         b = −½ q·u_c. A step that no backtracking makes decrease |r| is taken at the
         smallest fraction at most ``max_uphill`` times (then the increment fails: an
         orbit between two states is not worth 25 iterations). On convergence the state
-        is committed; otherwise restored. Returns (result, λ)."""
-        lam_c = self.load_factor
+        is committed (with ``commit``; else kept as the current, uncommitted state);
+        otherwise restored. Returns (result, λ).
+
+        ``damping`` (a local array, zero at prescribed dofs) adds the viscous force
+        C (x − x_prev) to the residual and C to the tangent's diagonal: one step of
+        pseudo-transient continuation (:meth:`_jump`); ``lam_start`` is then the load
+        factor the step starts from and ``ds_scale`` the size of the constraint's
+        tolerance (ds may be 0).
+
+        ``constraint`` replaces the linear constraint by a nonlinear one, g(u) = ds:
+        called at the current state it returns (g, ∂g/∂u as a local array, ∂g/∂λ),
+        and the increment converges once |g − ds| ≤ ``ctol`` · ds_scale."""
+        lam_c = self.load_factor if lam_start is None else float(lam_start)
+        cscale = abs(ds) if ds_scale is None else float(ds_scale)
         xc = np.zeros(self.n_local)
         self._gather(xc)
         x = xc.copy()
@@ -749,13 +766,23 @@ class StaticSolver:
             self._forces()
             self._x_at_forces[:] = xa
             self._residual_into(r)
+            if damping is not None:
+                r[:] += damping * (xa - x_prev)
             return self._free_norm(r)
+
+        def tangent():
+            self.assemble_tangent()
+            if damping is not None:
+                self._add_diagonal(damping)
 
         history: list[float] = []
         converged, its, reason = False, 0, "DIVERGED_MAX_IT"
         # predictor: the tangent at the committed state along the live load
         rn = evaluate(x, lam)
-        self.assemble_tangent()
+        g_now = 0.0
+        if constraint is not None:
+            g_now, a, b = constraint()
+        tangent()
         if not self._solve_linear(q, dq):
             reason = "DIVERGED_LINEAR_SOLVE"
         else:
@@ -763,7 +790,7 @@ class StaticSolver:
             if adq == 0.0 or not math.isfinite(adq):
                 reason = "DIVERGED_LINEAR_SOLVE"
             else:
-                dlam = ds / adq
+                dlam = (ds - g_now) / adq
                 x += dlam * dq
                 lam += dlam
                 rn = evaluate(x, lam)
@@ -771,15 +798,19 @@ class StaticSolver:
                 history.append(rn)
                 uphill = 0
                 while True:
-                    c = dot(a, x - xc) + b * (lam - lam_c) - ds
-                    if rn <= self.rtol * ref and abs(c) <= 1e-8 * abs(ds):
+                    if constraint is not None:
+                        g_now, a, b = constraint()
+                        c = g_now - ds
+                    else:
+                        c = dot(a, x - xc) + b * (lam - lam_c) - ds
+                    if rn <= self.rtol * ref and abs(c) <= ctol * cscale:
                         converged, reason = True, "CONVERGED_FNORM_ABS"
                         break
                     if its >= self.max_it or not math.isfinite(rn):
                         reason = "DIVERGED_MAX_IT" if math.isfinite(rn) else "DIVERGED_FNORM_NAN"
                         break
                     its += 1
-                    self.assemble_tangent()
+                    tangent()
                     if not (self._solve_linear(-r, dr) and self._solve_linear(q, dq)):
                         reason = "DIVERGED_LINEAR_SOLVE"
                         break
@@ -789,17 +820,34 @@ class StaticSolver:
                         break
                     dlam = -(c + dot(a, dr)) / adq
                     du = dr + dlam * dq
-                    # backtracking on the residual norm (the constraint is linear: any
-                    # fraction of the step keeps a·Δu on its way to ds)
-                    alpha = 1.0
+                    # the full step if it lowers |r|; else the critical point of the
+                    # line (r·Δu = 0, the energy's minimum along it where the forces
+                    # derive from one: a law's kink crossed by the step — a joint
+                    # closing, a sliding point reversing — makes |r| jump while r·Δu
+                    # stays continuous, and backtracking on |r| alone then orbits
+                    # between two states); else backtracking on |r|. The constraint is
+                    # linear: any fraction of the step keeps a·Δu on its way to ds.
                     x0, lam0, rn0 = x.copy(), lam, rn
-                    for _ in range(max_backtracks + 1):
-                        x = x0 + alpha * du
-                        lam = lam0 + alpha * dlam
-                        rn = evaluate(x, lam)
-                        if rn < rn0 or alpha < 0.5 ** max_backtracks:
-                            break
-                        alpha *= 0.5
+                    g0 = dot(r, du)
+                    x = x0 + du
+                    lam = lam0 + dlam
+                    rn = evaluate(x, lam)
+                    if rn >= rn0:
+                        alpha = self._critical_point(g0, dot(r, du), x0, lam0, du, dlam,
+                                                     evaluate, r)
+                        if alpha is None:
+                            alpha = 0.5
+                            for _ in range(max_backtracks):
+                                x = x0 + alpha * du
+                                lam = lam0 + alpha * dlam
+                                rn = evaluate(x, lam)
+                                if rn < rn0 or alpha < 0.5 ** max_backtracks:
+                                    break
+                                alpha *= 0.5
+                        else:
+                            x = x0 + alpha * du
+                            lam = lam0 + alpha * dlam
+                            rn = evaluate(x, lam)
                     ref = self._reference()
                     history.append(rn)
                     if rn >= rn0:
@@ -809,12 +857,13 @@ class StaticSolver:
                             break
         ref = self._reference() if converged else max(self._ref, 1.0)
         if converged:
-            self.commit()
-            self.load_factor = float(lam)
+            if commit:
+                self.commit()
+                self.load_factor = float(lam)
         else:
-            self._set_load(lam_c)
+            self._set_load(self.load_factor)
             self.restore()
-            lam = lam_c
+            lam = self.load_factor
         res = NewtonResult(float(lam), converged, its, rn, ref, reason, tuple(history))
         self.results.append(res)
         if self.comm.rank == 0:
@@ -822,23 +871,166 @@ class StaticSolver:
                      lam, "converged" if converged else "NOT converged", its, reason)
         return res, lam
 
+    def _add_diagonal(self, d: np.ndarray) -> None:
+        """Add the local array ``d`` to the assembled tangent's diagonal."""
+        if getattr(self, "_dvec", None) is None:
+            self._dvec = self.x.duplicate()
+        self._dvec.array[:] = d
+        self.J.setDiagonal(self._dvec, addv=PETSc.InsertMode.ADD_VALUES)
+        self.J.assemble()
+
+    def _jump(self, ds: float, a: np.ndarray, q: np.ndarray, max_steps: int = 60,
+              eta0: float = 1e-2) -> tuple[NewtonResult, float, int]:
+        """Equilibrium at the displacement measure's next value a·(u − u_c) = ds where
+        the path turns back (a snap-back: no equilibrium near the committed state at the
+        next displacement, the load must drop). Found by pseudo-transient continuation
+        (Kelley & Keyes 1998, "Convergence analysis of pseudo-transient continuation",
+        SIAM J. Numer. Anal. 35): a viscous force η D (u − u_prev), D the diagonal of
+        the tangent at the committed state, is added and the damped equilibria are
+        followed in pseudo time, η cut as the residual falls (switched evolution
+        relaxation) and raised on a failed step, until the undamped residual meets the
+        tolerance. The displacement measure stays at ds throughout (the λ of each step
+        is free): the state jumped to is the one a jack holding the load-line
+        displacement would find, the load dropping at constant displacement. Every
+        pseudo step returns from the committed history, so the result is one
+        backward-Euler increment from the committed state, as any other. Committed on
+        success. Returns (result, λ, pseudo steps)."""
+        b = self.sets[0]
+        self._forces()
+        self.assemble_tangent()
+        dv = self.J.getDiagonal()
+        diag = np.abs(dv.array.copy())
+        dv.destroy()
+        free = np.ones(self.n_local, dtype=bool)
+        free[b.sl] = b.presc == 0
+        if self.comm.rank == 0:
+            for s_ in self.sets[1:]:
+                free[s_.sl] = s_.presc == 0
+        diag[~free] = 0.0
+        lam_c = self.load_factor
+        xc = np.zeros(self.n_local)
+        self._gather(xc)
+        x_prev = xc.copy()
+        lam = lam_c
+        r = np.zeros(self.n_local)
+        eta, first, steps, its = eta0, True, 0, 0
+        res = NewtonResult(lam_c, False, 0, math.inf, 1.0, "DIVERGED_MAX_IT", ())
+        rn_prev = None
+        while steps < max_steps:
+            steps += 1
+            res, lam_new = self._arc_increment(ds if first else 0.0, a, q,
+                                               damping=eta * diag, x_prev=x_prev,
+                                               lam_start=lam, commit=False,
+                                               ds_scale=abs(ds))
+            its += res.iterations
+            if not res.converged:
+                # restored to the committed state: start over, more viscous
+                eta *= 16.0
+                first, lam, rn_prev = True, lam_c, None
+                x_prev = xc.copy()
+                if eta > 1e4:
+                    break
+                continue
+            first = False
+            lam = lam_new
+            x = np.zeros(self.n_local)
+            self._gather(x)
+            # the undamped residual at the damped equilibrium
+            self._residual_into(r)
+            rn = self._free_norm(r)
+            ref = self._reference()
+            if rn <= self.rtol * ref:
+                self.commit()
+                self.load_factor = float(lam)
+                out = NewtonResult(float(lam), True, its, rn, ref, "CONVERGED_PSEUDO_TRANSIENT",
+                                   res.history)
+                self.results.append(out)
+                if self.comm.rank == 0:
+                    log.info("snap-back jumped at fixed displacement measure: load factor "
+                             "%.6g -> %.6g in %d pseudo steps, %d iterations", lam_c, lam,
+                             steps, its)
+                return out, float(lam), steps
+            # switched evolution relaxation: less viscosity as the residual falls
+            eta = eta * min(4.0, max(0.05, rn / rn_prev)) if rn_prev else eta * 0.25
+            rn_prev = rn
+            x_prev = x
+        self._set_load(lam_c)
+        self.restore()
+        out = NewtonResult(lam_c, False, its, res.residual, res.reference,
+                           "DIVERGED_PSEUDO_TRANSIENT", res.history)
+        self.results.append(out)
+        return out, lam_c, steps
+
+    def _critical_point(self, g0: float, g1: float, x0: np.ndarray, lam0: float,
+                        du: np.ndarray, dlam: float, evaluate, r: np.ndarray,
+                        max_evals: int = 6, tol: float = 0.5) -> float | None:
+        """The step fraction α ∈ (0, 1) where g(α) = r(x0 + α Δu, λ0 + α Δλ)·Δu changes
+        sign (Illinois regula falsi, at most ``max_evals`` residuals; stops once
+        |g| ≤ ``tol`` |g(0)|, Crisfield's slack line search), or None when the step
+        does not bracket one (g(0) < 0 < g(1) is needed: a descent direction that
+        overshoots)."""
+        if not (g0 < 0.0 < g1) or not math.isfinite(g1):
+            return None
+        lo, glo, hi, ghi = 0.0, g0, 1.0, g1
+        side = 0
+        alpha = 0.5
+        for _ in range(max_evals):
+            alpha = (lo * ghi - hi * glo) / (ghi - glo)
+            alpha = min(max(alpha, lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
+            evaluate(x0 + alpha * du, lam0 + alpha * dlam)
+            ga = self.comm.allreduce(float(np.dot(r, du)))
+            if not math.isfinite(ga):
+                return None
+            if abs(ga) <= tol * abs(g0):
+                break
+            if ga > 0.0:
+                hi, ghi = alpha, ga
+                if side == 1:
+                    glo *= 0.5
+                side = 1
+            else:
+                lo, glo = alpha, ga
+                if side == -1:
+                    ghi *= 0.5
+                side = -1
+        return alpha
+
+    def _dissipation(self) -> tuple[float, np.ndarray, float]:
+        """The energy the interactions' laws dissipate from the committed state to the
+        current one [J], its gradient over the local dofs and its λ derivative (0)."""
+        b = self.sets[0]
+        a = np.zeros(self.n_local)
+        d = 0.0
+        for c in self.interactions:
+            fn = getattr(c, "dissipation", None)
+            if fn is not None:
+                dc, g = fn(self._state)
+                d += dc
+                a[b.sl] += g
+        a[b.sl][b.presc != 0] = 0.0
+        return d, a, 0.0
+
     def _dissipation_step(self, q: np.ndarray, work: float,
-                          fractions: Sequence[float] = (0.05, 0.0125, 0.003)
+                          fractions: Sequence[float] = (0.05, 0.0125, 0.003, 0.0008, 0.0002)
                           ) -> tuple[list[NewtonResult], float]:
         """Increments under dissipation control from the committed state, prescribing
         ``fractions`` of ``work`` [J] (in turn: 5 %, then 1.25 %, then 0.3 %) as the
-        energy dissipated; stops at the first that converges. Returns every result (the
-        last the one that counts) and the fraction of the last."""
-        b = self.sets[0]
-        a = np.zeros(self.n_local)
-        f = self.dead_factor * self.model.f_dead + self.load_factor * self.model.f_live
-        a[b.sl] = np.where(b.presc != 0, 0.0, 0.5 * f)
-        xc = np.zeros(self.n_local)
-        self._gather(xc)
-        bb = -0.5 * self.comm.allreduce(float(np.dot(q, xc)))
+        energy the joints' laws dissipate (their own account: plastic work of the
+        return mapping, exact; its gradient by finite differences); stops at the first
+        that converges. Returns every result (the last the one that counts) and the
+        fraction of the last.
+
+        The energy is the laws' own, not the Gutiérrez (2004) estimate
+        ½ [f_ext(λ_c)·Δu − Δλ q·u_c]: that estimate assumes secant unloading (damage),
+        while the joints and contacts here unload elastically from a permanent
+        deformation (plasticity); for them it counts an elastic unloading as
+        dissipation, and the path then runs down and up the unloading line without
+        moving on."""
         out = []
+        a0 = np.zeros(self.n_local)
         for frac in fractions:
-            res, _ = self._arc_increment(frac * work, a, q, b=bb)
+            res, _ = self._arc_increment(frac * work, a0, q, constraint=self._dissipation,
+                                         ctol=1e-4)
             out.append(res)
             if res.converged:
                 break
@@ -990,6 +1182,7 @@ class StaticSolver:
         run.iterations.append(0)
         peak, k0, k_last = lam0, None, None
         switched = 0  # increments taken under dissipation control
+        jumped = 0  # snap-backs passed at a fixed displacement measure (:meth:`_jump`)
         diss: float | None = None  # on a snap-back: the fraction of ½ λ d dissipated per step
         step = float(increment)
         status = None
@@ -1024,14 +1217,22 @@ class StaticSolver:
                 res, _ = self._arc_increment(ds, a, q)
                 if (not res.converged and dissipation and peak > 0 and d_now > 0
                         and step <= dmin * (1 + 1e-12)):
-                    # the load point's displacement may turn back (a joint cracking
-                    # snaps back): try the energy dissipated instead, which only grows
+                    # no equilibrium at the next displacement near this state: the path
+                    # turns back (a snap-back). Follow the turn under dissipation
+                    # control; else find the state a jack holding the displacement
+                    # would jump to (the load drops at the next displacement)
+                    run.results.append(res)
                     tried, frac = self._dissipation_step(q, 0.5 * abs(run.loads[-1]) * d_now)
                     run.results.extend(tried[:-1])
                     res = tried[-1]
                     if res.converged:
                         switched += 1
                         in_snap, diss = True, frac
+                    else:
+                        run.results.append(res)
+                        res, _, _ = self._jump(ds, a, q)
+                        if res.converged:
+                            jumped += 1
             else:
                 target = d0 + sign * (d_now + ds)
                 disp = {prescription: (target, None) if component == 0 else (None, target)}
@@ -1101,6 +1302,11 @@ class StaticSolver:
                 status = RunStatus(Status.DISPLACEMENT_LIMIT, lam, peak, None,
                                    f"max_displacement = {max_displacement:.4g} m reached "
                                    f"(current stiffness parameter {sp:.2g})")
+        if jumped:
+            status = dataclasses.replace(
+                status, detail=f"{status.detail}; {jumped} snap-back(s) passed at constant "
+                               "displacement (the load dropping, as under a displacement-"
+                               "controlled jack)")
         if switched:
             status = dataclasses.replace(
                 status, detail=f"{status.detail}; {switched} increment(s) under dissipation "

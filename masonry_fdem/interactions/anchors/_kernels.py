@@ -221,6 +221,8 @@ def bar_tangent(xa, ua, conn, L0, ep, jacking, es, rel_step, rows, cols, vals):
         dofs[2] = 2 * conn[e, 1]
         dofs[3] = dofs[2] + 1
         h = rel_step * L0[e]
+        _, _, fx0, fy0, _ = bar_element(xa, uw, conn, L0, ep, jacking, es, e, scratch, res)
+        b0 = _bar_branch(es[e], scratch)
         for j in range(4):
             k = dofs[j]
             u0 = uw[k]
@@ -229,9 +231,16 @@ def bar_tangent(xa, ua, conn, L0, ep, jacking, es, rel_step, rows, cols, vals):
             um = u0 - hk
             uw[k] = up
             _, _, fxp, fyp, _ = bar_element(xa, uw, conn, L0, ep, jacking, es, e, scratch, res)
+            bp = _bar_branch(es[e], scratch)
             uw[k] = um
             _, _, fxm, fym, _ = bar_element(xa, uw, conn, L0, ep, jacking, es, e, scratch, res)
+            bm = _bar_branch(es[e], scratch)
             uw[k] = u0
+            # one-sided on the element's own branch where a step crosses yield
+            if bp == b0 and bm != b0:
+                fxm, fym, um = fx0, fy0, u0
+            elif bm == b0 and bp != b0:
+                fxp, fyp, up = fx0, fy0, u0
             den = up - um
             gx = -(fxp - fxm) / den
             gy = -(fyp - fym) / den
@@ -405,6 +414,9 @@ def bond_tangent(xa, ua, ub, conn, L0, hnode, helem, hosts, hw, npr, laws_s, law
             dofs[j + 1] = dofs[j] + 1
         i = hnode[h]
         step = rel_step * L0[e]
+        gx0, gy0 = bond_point(xa, uw, bw, conn, hnode, helem, hosts, hw, npr, laws_s,
+                              laws_t, laws_n, laws_k0, dref, ns, h, nt_s, out_s, t, d, res)
+        b0 = _bond_branch(ns[h], nt_s, out_s)
         for j in range(10):
             k = dofs[j]
             arr = uw if k < na else bw
@@ -417,11 +429,18 @@ def bond_tangent(xa, ua, ub, conn, L0, hnode, helem, hosts, hw, npr, laws_s, law
             gxp, gyp = bond_point(xa, uw, bw, conn, hnode, helem, hosts, hw, npr, laws_s,
                                   laws_t, laws_n, laws_k0, dref, ns, h, nt_s, out_s, t, d,
                                   res)
+            bp = _bond_branch(ns[h], nt_s, out_s)
             arr[kk] = um
             gxm, gym = bond_point(xa, uw, bw, conn, hnode, helem, hosts, hw, npr, laws_s,
                                   laws_t, laws_n, laws_k0, dref, ns, h, nt_s, out_s, t, d,
                                   res)
+            bm = _bond_branch(ns[h], nt_s, out_s)
             arr[kk] = u0
+            # one-sided on the point's own branch where a step crosses a kink
+            if bp == b0 and bm != b0:
+                gxm, gym, um = gx0, gy0, u0
+            elif bm == b0 and bp != b0:
+                gxp, gyp, up = gx0, gy0, u0
             den = up - um
             gx = -(gxp - gxm) / den
             gy = -(gyp - gym) / den
@@ -439,6 +458,26 @@ def bond_tangent(xa, ua, ub, conn, L0, hnode, helem, hosts, hw, npr, laws_s, law
                 vals[nent + m] = fl[m]
             nent += 8
     return nent
+
+
+@njit(cache=True)
+def _bar_branch(es_e, et_e):
+    """1 if the trial state yielded (or ruptured) from the committed one, else 0."""
+    return 1 if (et_e[ES_ALPHA] > es_e[ES_ALPHA] or et_e[ES_RUPT] != es_e[ES_RUPT]) else 0
+
+
+@njit(cache=True)
+def _bond_branch(ns_h, nt_h, out_h):
+    """The branch of a bond point's laws (bits: bond slipping on its envelope, dowel
+    yielding, end plate bearing)."""
+    out = 0
+    if nt_h[NS_KAPPA] > ns_h[NS_KAPPA]:
+        out += 1
+    if nt_h[NS_WP] != ns_h[NS_WP]:
+        out += 2
+    if out_h[NO_PLATE] != 0.0:
+        out += 4
+    return out
 
 
 @njit(cache=True)

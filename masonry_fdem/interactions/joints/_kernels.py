@@ -444,6 +444,7 @@ def joint_tangent(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step
     """
     uw = u.copy()
     scratch = np.empty(N_STATE)
+    f0 = np.empty(8)
     fp = np.empty(8)
     fm = np.empty(8)
     dofs = np.empty(8, dtype=np.int64)
@@ -463,6 +464,8 @@ def joint_tangent(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step
         for j in range(0, 8, 2):
             dofs[j + 1] = dofs[j] + 1
         h = rel_step * math.sqrt((X[a1, 0] - X[a0, 0]) ** 2 + (X[a1, 1] - X[a0, 1]) ** 2)
+        point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, f0)
+        b_0 = _branch(s0[q], scratch)
         for j in range(8):
             k = dofs[j]
             u0 = uw[k]
@@ -471,9 +474,22 @@ def joint_tangent(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step
             um = u0 - hk
             uw[k] = up
             point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fp)
+            b_p = _branch(s0[q], scratch)
             uw[k] = um
             point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fm)
+            b_m = _branch(s0[q], scratch)
             uw[k] = u0
+            # the derivative of the branch the point is on: one-sided where a step
+            # crosses a kink of the law (a central difference there would blend the
+            # two branches' stiffnesses, e.g. the elastic and the softening one)
+            if b_p == b_0 and b_m != b_0:
+                for i in range(8):
+                    fm[i] = f0[i]
+                um = u0
+            elif b_m == b_0 and b_p != b_0:
+                for i in range(8):
+                    fp[i] = f0[i]
+                up = u0
             den = up - um
             for i in range(8):
                 rows[nent] = dofs[i]
@@ -481,6 +497,61 @@ def joint_tangent(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step
                 vals[nent] = -(fp[i] - fm[i]) / den
                 nent += 1
     return nent
+
+
+@njit(cache=True)
+def dissipation_gradient(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step,
+                         g):
+    """The energy the live points dissipate from the committed state to ``u`` [J], and
+    its gradient ∂D/∂u [J/m] into ``g`` (2n,) (+=), by central differences of the
+    return mapping like :func:`joint_tangent` (a point at the elastic limit gets half its
+    loading slope: the gradient only steers the dissipation constraint's Newton
+    iterations, the dissipation itself is exact)."""
+    uw = u.copy()
+    scratch = np.empty(N_STATE)
+    fl = np.empty(8)
+    total = 0.0
+    for q in range(ipa.shape[0]):
+        if alive[q] == 0:
+            continue
+        p = props[ipmat[q]]
+        a0 = ipa[q, 0]
+        a1 = ipa[q, 1]
+        b0 = ipb[q, 0]
+        b1 = ipb[q, 1]
+        point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fl)
+        total += w[q] * (scratch[S_DISS] - s0[q, S_DISS])
+        h = rel_step * math.sqrt((X[a1, 0] - X[a0, 0]) ** 2 + (X[a1, 1] - X[a0, 1]) ** 2)
+        for j in range(8):
+            node = a0 if j < 2 else (a1 if j < 4 else (b0 if j < 6 else b1))
+            k = 2 * node + (j % 2)
+            u0 = uw[k]
+            hk = max(h, rel_step * abs(u0))
+            up = u0 + hk
+            um = u0 - hk
+            uw[k] = up
+            point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fl)
+            dp = scratch[S_DISS]
+            uw[k] = um
+            point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fl)
+            dm = scratch[S_DISS]
+            uw[k] = u0
+            g[k] += w[q] * (dp - dm) / (up - um)
+    return total
+
+
+@njit(cache=True)
+def _branch(s0q, s1q):
+    """Which surfaces flowed in the return mapping from ``s0q`` to ``s1q`` (bits:
+    tension, shear, cap): the branch of the law a point is on."""
+    out = 0
+    if s1q[S_K1] > s0q[S_K1]:
+        out += 1
+    if s1q[S_K2] > s0q[S_K2]:
+        out += 2
+    if s1q[S_K3] > s0q[S_K3]:
+        out += 4
+    return out
 
 
 @njit(cache=True)

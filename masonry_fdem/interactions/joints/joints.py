@@ -473,6 +473,25 @@ class Joints(Interaction):
         dofs = K.node_dofs(self.ext_input)
         K.add(dofs[rows[:nent]], dofs[cols[:nent]], vals[:nent])
 
+    def dissipation(self, state: State) -> tuple[float, np.ndarray]:
+        """The energy [J] the joints dissipate from the committed state to the current
+        displacement, and its gradient [J/m] over this rank's block dofs (collective;
+        the static solver's dissipation control). Only the joints' own laws count."""
+        nloc = 2 * self.n_local_nodes
+        self.u[:nloc] = state.u[BLOCKS][:nloc]
+        if self.exchange is not None:
+            self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
+            self.u[nloc:] = self._ghost_u.ravel()
+        g = np.zeros_like(self.f)
+        d = JK.dissipation_gradient(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib,
+                                    self.w, self.ipmat, self.props, self.alive, self.s0,
+                                    JK.FD_STEP, g)
+        out = np.zeros(state.u[BLOCKS].size)
+        out[:nloc] = g[:nloc]
+        if self.exchange is not None:
+            self.exchange.reverse(g[nloc:].reshape(-1, 2), out[:nloc].reshape(-1, 2))
+        return float(self.comm.allreduce(d)), out
+
     def commit(self) -> None:
         """Accept the trial state (every explicit step; a converged DR increment).
 
