@@ -1033,6 +1033,21 @@ class StaticSolver:
                                          ctol=1e-4)
             out.append(res)
             if res.converged:
+                return out, frac
+        # last, Gutiérrez's secant estimate (linear in the increment): where the joints'
+        # own account finds no step it may still find an equilibrium to go on from —
+        # every state it reaches is one, though it may lie on an unloading line
+        b = self.sets[0]
+        a = np.zeros(self.n_local)
+        f = self.dead_factor * self.model.f_dead + self.load_factor * self.model.f_live
+        a[b.sl] = np.where(b.presc != 0, 0.0, 0.5 * f)
+        xc = np.zeros(self.n_local)
+        self._gather(xc)
+        bb = -0.5 * self.comm.allreduce(float(np.dot(q, xc)))
+        for frac in fractions[:3]:
+            res, _ = self._arc_increment(frac * work, a, q, b=bb)
+            out.append(res)
+            if res.converged:
                 break
         return out, frac
 
@@ -1056,6 +1071,7 @@ class StaticSolver:
         stop_drop: float = 0.5,
         mechanism_ratio: float = 1e-2,
         dissipation: bool = True,
+        max_stall_steps: int = 100,
         callback: Callable[[PathPoint], None] | None = None,
     ) -> StaticRun:
         """Trace the load–displacement path from the committed state up to and past the
@@ -1081,22 +1097,25 @@ class StaticSolver:
 
         Snap-backs (arc length, ``dissipation``): where an increment of the
         displacement measure finds no equilibrium even at the smallest size — a mortar
-        joint that cracks may make
-        the loaded point move back — the increment is retried under dissipation control
-        (Gutiérrez 2004; the switching of Verhoosel et al. 2009): the energy dissipated,
-        ½ [f_ext(λ_c)·Δu − Δλ q·u_c], is prescribed instead (5 %, 1.25 % and 0.3 % of
-        the work ½ λ_c d done so far), which only grows. Each increment that follows
-        tries the displacement measure's smallest increment first — an equilibrium at the
-        next displacement ends the snap-back (where a jack under displacement control
-        would jump to) — and else stays under dissipation control, at the fraction that
-        converged last (grown by ``grow`` after an easy one, at most 5 %; cut to a
-        quarter and a sixteenth on failure), until the displacement measure moves
-        forward. Such increments may move the measure backwards.
+        joint that cracks may make the loaded point move back — the increment is retried
+        under dissipation control (the switching of Verhoosel et al. 2009): the energy
+        the joints' laws dissipate (their own plastic work) is prescribed instead (5 %,
+        1.25 %, 0.3 %, 0.08 %, 0.02 % of the work ½ λ_c d done so far), which only
+        grows; failing that, Gutiérrez's (2004) secant estimate ½ [f_ext(λ_c)·Δu −
+        Δλ q·u_c] (it may also step along an elastic unloading line); failing that, the
+        state a jack holding the displacement would jump to (:meth:`_jump`). Each
+        increment that follows tries the displacement measure's smallest increment first
+        — an equilibrium at the next displacement ends the snap-back — and else stays
+        under dissipation control, at the fraction that converged last (grown by
+        ``grow`` after an easy one, at most 5 %), until the displacement measure moves
+        forward. Such increments may move the measure backwards; after
+        ``max_stall_steps`` increments without passing the farthest displacement reached
+        (and the load within ``peak_drop`` of its peak) the run ends *not converged*.
 
         Increments: one converging in at most ``easy_iterations`` lets the next grow
         ``grow`` times (up to ``max_increment``, default 8 × ``increment``); one that
         fails is undone and halved, down to ``min_increment`` (default
-        ``increment``/64).
+        ``increment``/64; ``assess`` uses 1/1024).
 
         Status (the loads: λ for arc length, the reaction [N] for displacement
         control): *peak passed* once the load has fallen ``stop_drop`` below its
@@ -1123,6 +1142,8 @@ class StaticSolver:
             raise ValueError("need 0 < min_increment <= increment <= max_increment")
         if not 0 < peak_drop <= stop_drop < 1:
             raise ValueError("need 0 < peak_drop <= stop_drop < 1")
+        if max_stall_steps < 1:
+            raise ValueError(f"max_stall_steps must be >= 1, got {max_stall_steps}")
 
         def dot(u, v):
             return self.comm.allreduce(float(np.dot(u, v)))
@@ -1183,6 +1204,7 @@ class StaticSolver:
         peak, k0, k_last = lam0, None, None
         switched = 0  # increments taken under dissipation control
         jumped = 0  # snap-backs passed at a fixed displacement measure (:meth:`_jump`)
+        d_far, stall = 0.0, 0  # the farthest displacement; steps since it last grew
         diss: float | None = None  # on a snap-back: the fraction of ½ λ d dissipated per step
         step = float(increment)
         status = None
@@ -1265,6 +1287,17 @@ class StaticSolver:
             run.load_factors.append(self.load_factor)
             run.iterations.append(res.iterations)
             peak = max(peak, lam)
+            if d > d_far:
+                d_far, stall = d, 0
+            else:
+                stall += 1
+                if stall >= max_stall_steps and lam > (1.0 - peak_drop) * peak:
+                    status = RunStatus(
+                        Status.NOT_CONVERGED, lam, peak, d_far,
+                        f"{stall} increments (under dissipation control) without getting "
+                        f"past displacement {d_far:.4g} m: the path runs back and forth "
+                        "there", at_kind="displacement")
+                    break
             if in_snap and dd > 0:
                 # the snap-back is over: back to the displacement measure, from its
                 # smallest increment
