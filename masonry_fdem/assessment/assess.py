@@ -110,7 +110,8 @@ class Assessment:
 
     Attributes:
         case: the case name.
-        control: "load" or "displacement".
+        control: "arc-length" (the Newton solver), or "load" or "displacement" (dynamic
+            relaxation, as the case asks).
         status: how the run ended (:class:`~masonry_fdem.solvers.status.RunStatus`, loads
             [N]; ``at``: the load [N] tried, or the load-line displacement [m] tried when
             ``stopped_under`` is "displacement"); :attr:`status_line` says it in words.
@@ -680,7 +681,8 @@ def assess(
     hinges_now = [monitor.event(k, kind, side, 0, load, disp, op)
                   for k, kind, side, load, disp, op in open_at_collapse]
     result = Assessment(
-        case=case.name, control=ld.control.value, status=status, peak_load=float(collapse),
+        case=case.name, control="arc-length" if newton else ld.control.value, status=status,
+        peak_load=float(collapse),
         resolution=float(resolution), stopped_under=stopped_under,
         loads=np.array(loads), displacements=np.array(disps), iterations=iters,
         events=events, hinges_at_collapse=hinges_now, limit_load=limit_load,

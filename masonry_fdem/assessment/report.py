@@ -146,7 +146,7 @@ def _report(case, res, mag: float) -> str:
     lines += [
         f"- Arch: {a.kind.value}, span {a.span:g} m, {a.rings} ring(s) of {a.ring_thickness:g} m, "
         f"voussoirs {list(a.voussoirs)}, barrel width {a.width:g} m; {res.cells} triangles.",
-        f"- Load: {ld.control.value} control at {ld.position:g} of the span through a "
+        f"- Load: {res.control} control at {ld.position:g} of the span through a "
         f"{ld.spreader_width:g} m spreader; self-weight {'on' if ld.self_weight else 'off'}.",
         f"- Ring interfaces: {case.ring_joint_type}"
         f"{'' if a.rings > 1 else ' (one ring)'}; radial joints: "
