@@ -250,6 +250,7 @@ class StaticSolver:
         self._ref = 1.0
         self._moved = False
         self._work: tuple[PETSc.Vec, PETSc.Vec] | None = None  # rhs, solution of K x = b
+        self._dvec: PETSc.Vec | None = None  # a diagonal added to the tangent
         self._history: list[float] = []
         self.results: list[NewtonResult] = []
         self.u_committed = self.sets[0].uc
@@ -833,9 +834,9 @@ class StaticSolver:
                     lam = lam0 + dlam
                     rn = evaluate(x, lam)
                     if rn >= rn0:
-                        alpha = self._critical_point(g0, dot(r, du), x0, lam0, du, dlam,
+                        found = self._critical_point(g0, dot(r, du), x0, lam0, du, dlam,
                                                      evaluate, r)
-                        if alpha is None:
+                        if found is None:
                             alpha = 0.5
                             for _ in range(max_backtracks):
                                 x = x0 + alpha * du
@@ -844,10 +845,10 @@ class StaticSolver:
                                 if rn < rn0 or alpha < 0.5 ** max_backtracks:
                                     break
                                 alpha *= 0.5
-                        else:
+                        else:  # the state is left at the fraction found
+                            alpha, rn = found
                             x = x0 + alpha * du
                             lam = lam0 + alpha * dlam
-                            rn = evaluate(x, lam)
                     ref = self._reference()
                     history.append(rn)
                     if rn >= rn0:
@@ -873,7 +874,7 @@ class StaticSolver:
 
     def _add_diagonal(self, d: np.ndarray) -> None:
         """Add the local array ``d`` to the assembled tangent's diagonal."""
-        if getattr(self, "_dvec", None) is None:
+        if self._dvec is None:
             self._dvec = self.x.duplicate()
         self._dvec.array[:] = d
         self.J.setDiagonal(self._dvec, addv=PETSc.InsertMode.ADD_VALUES)
@@ -895,18 +896,12 @@ class StaticSolver:
         pseudo step returns from the committed history, so the result is one
         backward-Euler increment from the committed state, as any other. Committed on
         success. Returns (result, λ, pseudo steps)."""
-        b = self.sets[0]
         self._forces()
         self.assemble_tangent()
         dv = self.J.getDiagonal()
         diag = np.abs(dv.array.copy())
         dv.destroy()
-        free = np.ones(self.n_local, dtype=bool)
-        free[b.sl] = b.presc == 0
-        if self.comm.rank == 0:
-            for s_ in self.sets[1:]:
-                free[s_.sl] = s_.presc == 0
-        diag[~free] = 0.0
+        diag[self._presc_global - self.start] = 0.0  # no viscosity on prescribed dofs
         lam_c = self.load_factor
         xc = np.zeros(self.n_local)
         self._gather(xc)
@@ -963,21 +958,21 @@ class StaticSolver:
 
     def _critical_point(self, g0: float, g1: float, x0: np.ndarray, lam0: float,
                         du: np.ndarray, dlam: float, evaluate, r: np.ndarray,
-                        max_evals: int = 6, tol: float = 0.5) -> float | None:
+                        max_evals: int = 6, tol: float = 0.5
+                        ) -> tuple[float, float] | None:
         """The step fraction α ∈ (0, 1) where g(α) = r(x0 + α Δu, λ0 + α Δλ)·Δu changes
         sign (Illinois regula falsi, at most ``max_evals`` residuals; stops once
-        |g| ≤ ``tol`` |g(0)|, Crisfield's slack line search), or None when the step
-        does not bracket one (g(0) < 0 < g(1) is needed: a descent direction that
-        overshoots)."""
+        |g| ≤ ``tol`` |g(0)|, Crisfield's slack line search), with |r| there (the state
+        is left evaluated at it); None when the step does not bracket one
+        (g(0) < 0 < g(1) is needed: a descent direction that overshoots)."""
         if not (g0 < 0.0 < g1) or not math.isfinite(g1):
             return None
         lo, glo, hi, ghi = 0.0, g0, 1.0, g1
         side = 0
-        alpha = 0.5
         for _ in range(max_evals):
             alpha = (lo * ghi - hi * glo) / (ghi - glo)
             alpha = min(max(alpha, lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
-            evaluate(x0 + alpha * du, lam0 + alpha * dlam)
+            rn = evaluate(x0 + alpha * du, lam0 + alpha * dlam)
             ga = self.comm.allreduce(float(np.dot(r, du)))
             if not math.isfinite(ga):
                 return None
@@ -993,7 +988,7 @@ class StaticSolver:
                 if side == -1:
                     ghi *= 0.5
                 side = -1
-        return alpha
+        return alpha, rn
 
     def _dissipation(self) -> tuple[float, np.ndarray, float]:
         """The energy the interactions' laws dissipate from the committed state to the
@@ -1014,11 +1009,12 @@ class StaticSolver:
                           fractions: Sequence[float] = (0.05, 0.0125, 0.003, 0.0008, 0.0002)
                           ) -> tuple[list[NewtonResult], float]:
         """Increments under dissipation control from the committed state, prescribing
-        ``fractions`` of ``work`` [J] (in turn: 5 %, then 1.25 %, then 0.3 %) as the
-        energy the joints' laws dissipate (their own account: plastic work of the
+        ``fractions`` of ``work`` [J] in turn (5 % down to 0.02 %) as the energy the
+        joints' laws dissipate (their own account: plastic work of the
         return mapping, exact; its gradient by finite differences); stops at the first
         that converges. Returns every result (the last the one that counts) and the
-        fraction of the last.
+        fraction of the last. Failing every fraction, the first three are tried with
+        the Gutiérrez estimate below.
 
         The energy is the laws' own, not the Gutiérrez (2004) estimate
         ½ [f_ext(λ_c)·Δu − Δλ q·u_c]: that estimate assumes secant unloading (damage),
