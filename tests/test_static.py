@@ -161,6 +161,36 @@ def test_contact_tangent_in_stick_and_in_slip(push, friction, sliding):
         assert asym > 1e-3
 
 
+def test_a_rebuild_at_a_failed_iterate_keeps_the_committed_friction_history():
+    """A Newton iterate far from the committed state (a failed increment) may trigger a
+    contact search there that loses the pairs in contact; back at the committed state
+    the pairs are found again with their committed tangential history (elastic stick),
+    not with zero — else the friction state depends on how an increment failed, and one
+    process and two end up 5e-4 apart (measured on the arch of test_path.py before)."""
+    model, contact = _sliding_block(10.0)
+    s = StaticSolver(model, interactions=contact)
+    assert s.solve(0.0).converged
+    st, _ = s.advance(displacement={"push": (1e-7, None)})
+    assert st.status is Status.LOAD_REACHED
+    keys, tau = contact.keys.copy(), contact.tau_c.copy()
+    assert np.abs(tau).max() > 0  # stuck, with a tangential history
+    r0 = s.reactions()["push"][0]
+    # the iterate: the block lifted 1 m off its base, where it touches nothing
+    y = model.blocks.x[model.node_input, 1]
+    lowest = {b: y[model.node_block == b].min() for b in np.unique(model.node_block)}
+    on_brick = np.array([lowest[b] > -1e-9 for b in model.node_block])
+    lift = np.zeros_like(s.sets[0].u)
+    lift[1::2][on_brick] = 1.0
+    s.sets[0].u[:] += lift
+    contact.rebuild()
+    assert not np.isin(keys, contact.keys).any()  # the pairs are lost there
+    s.restore()  # back at the committed state: found again, with their history
+    assert np.isin(keys, contact.keys).all()
+    pos = np.searchsorted(contact.keys, keys)
+    assert np.array_equal(contact.tau_c[pos], tau)
+    assert s.reactions()["push"][0] == pytest.approx(r0, rel=1e-12)
+
+
 def _arch(comm, point=None, E=10e9):
     """20 dry voussoirs, R = 1 m, t/R = 0.15, μ = 0.8, a downward unit point load at
     ``point`` (default: the extrados at 135°), voussoirs of Young's modulus ``E`` [Pa]

@@ -175,6 +175,11 @@ class BlockContact(Interaction):
         self.tau_c = np.zeros((0, 2))
         self.pmax_c = np.zeros((0, 2))
         self.keys = np.zeros(0, dtype=np.int64)
+        # the committed history by key, as at the last commit (None before one): a
+        # rebuild between commits (a failed Newton iterate far from the committed state)
+        # may drop a pair that is in contact in the committed state; its history comes
+        # back from here, not as zero
+        self._committed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         # facet-pair keys (min·n + max of global facet ids) left out: bonded joints
         self.excluded = np.zeros(0, dtype=np.int64)
         # blocks held on every side by intact bonded joints: no contact between two of them
@@ -360,6 +365,16 @@ class BlockContact(Interaction):
                                 strict=True):
                 if old.shape[0] == self.keys.size:
                     new[hit] = old[pos[hit]]
+        if self._committed is not None and self._committed[0].size and keys.size:
+            # the committed history from the last commit's pairs (the current pair set
+            # may come from a rebuild at a failed iterate that lost some of them)
+            ck, ctau, cpmax = self._committed
+            pos = np.minimum(np.searchsorted(ck, keys), ck.size - 1)
+            hit = ck[pos] == keys
+            hist[2][:] = 0.0
+            hist[3][:] = 0.0
+            hist[2][hit] = ctau[pos[hit]]
+            hist[3][hit] = cpmax[pos[hit]]
         order = np.argsort(keys, kind="stable")
         self.pairs = np.ascontiguousarray(pairs[order])
         self.keys = keys[order]
@@ -461,6 +476,7 @@ class BlockContact(Interaction):
         from it)."""
         self.tau_c[:] = self.tau
         self.pmax_c[:] = self.pmax
+        self._committed = (self.keys.copy(), self.tau_c.copy(), self.pmax_c.copy())
 
     def restore(self) -> None:
         """Back to the committed tangential history."""
@@ -476,6 +492,8 @@ class BlockContact(Interaction):
                 "contact_tangential": float(t), "friction_dissipated": float(d)}
 
     def _state_changed(self) -> None:
+        # the committed history is the one just set
+        self._committed = (self.keys.copy(), self.tau_c.copy(), self.pmax_c.copy())
         self.rebuild(np.zeros_like(self.model.v))
 
     def exclude(self, keys: np.ndarray, bonded_block: np.ndarray) -> None:
