@@ -211,3 +211,32 @@ def test_broken_open_joint_is_handed_to_contact_without_a_force_jump():
     assert res.converged
     fc = dr.reactions()["platen"][1]
     assert fc < -0.1 * jm.ft * A
+
+
+def test_cohesionless_interface_opens_as_a_gap_and_closes_where_it_parted():
+    """A sand layer (f_t = c = 0) is frictional contact: opened by 0.1 mm and closed
+    halfway, it carries nothing (a plastic opening would press it at once, σ = −k_n ·
+    0.05 mm); closed past where it parted, it carries −k_n × the overlap; the shear
+    spring, relaxed while open, starts from zero again: stick with τ = k_s Δs, then
+    Coulomb sliding at |τ| = −σ tan φ."""
+    from masonry_fdem.interactions.joints import _kernels as JK
+    kn, ks, tan_phi = 5e9, 2e9, 0.5
+    p = np.zeros(JK.N_PROPS)
+    p[JK.P_KN], p[JK.P_KS], p[JK.P_TANPHI] = kn, ks, tan_phi
+    s0, s1 = JK.empty_state(1)[0], JK.empty_state(1)[0]
+
+    def step(dn, ds, commit=True):
+        JK.interface_law(p, dn, ds, s0, s1)
+        if commit:
+            s0[:] = s1
+        return s1[JK.S_SN], s1[JK.S_TS]
+
+    assert step(-1e-6, 1e-7) == pytest.approx((-kn * 1e-6, ks * 1e-7))  # pressed, stuck
+    assert step(1e-4, 3e-4) == (0.0, 0.0)  # open, sheared while open
+    assert s0[JK.S_STATUS] == JK.OPEN
+    assert step(0.5e-4, 3e-4) == (0.0, 0.0)  # half closed: still a gap
+    sn, ts = step(-2e-6, 3e-4 + 1e-7)  # closed again past the faces' contact
+    assert sn == pytest.approx(-kn * 2e-6, rel=1e-12)
+    assert ts == pytest.approx(ks * 1e-7, rel=1e-9)  # the spring from zero
+    sn, ts = step(-2e-6, 3e-4 + 1e-5)  # sheared on: Coulomb sliding
+    assert abs(ts) == pytest.approx(-sn * tan_phi, rel=1e-9)

@@ -727,7 +727,8 @@ class StaticSolver:
                        lam_start: float | None = None, commit: bool = True,
                        ds_scale: float | None = None,
                        constraint: Callable[[], tuple[float, np.ndarray, float]] | None = None,
-                       ctol: float = 1e-8
+                       ctol: float = 1e-8,
+                       predictor: tuple[np.ndarray, float] | None = None,
                        ) -> tuple[NewtonResult, float]:
         """One increment of a linear path constraint from the committed state: find
         (u, λ) with r(u, λ) = 0 and a·(u − u_c) + b (λ − λ_c) = ds (the bordered Newton
@@ -747,7 +748,16 @@ class StaticSolver:
 
         ``constraint`` replaces the linear constraint by a nonlinear one, g(u) = ds:
         called at the current state it returns (g, ∂g/∂u as a local array, ∂g/∂λ),
-        and the increment converges once |g − ds| ≤ ``ctol`` · ds_scale."""
+        and the increment converges once |g − ds| ≤ ``ctol`` · ds_scale.
+
+        ``predictor`` (Δx as a local array, Δλ): the first iterate is the committed
+        state plus this step (the secant of the previous increment, scaled to ds) instead
+        of the tangent's step along the live load. Near a peak the tangent at the
+        committed state may be of the wrong branch for the way the path goes on (a
+        softening joint point that is on its surface at the committed state gets the
+        elastic tangent there, as no step has loaded it yet), and its predictor then
+        lands far from the path even for a small ds; the previous increment's secant
+        keeps the points that were loading on their branch."""
         lam_c = self.load_factor if lam_start is None else float(lam_start)
         cscale = abs(ds) if ds_scale is None else float(ds_scale)
         xc = np.zeros(self.n_local)
@@ -778,84 +788,91 @@ class StaticSolver:
 
         history: list[float] = []
         converged, its, reason = False, 0, "DIVERGED_MAX_IT"
-        # predictor: the tangent at the committed state along the live load
+        # predictor: the tangent at the committed state along the live load, or the
+        # given one
         rn = evaluate(x, lam)
         g_now = 0.0
         if constraint is not None:
             g_now, a, b = constraint()
-        tangent()
-        if not self._solve_linear(q, dq):
-            reason = "DIVERGED_LINEAR_SOLVE"
+        ok = True
+        if predictor is not None:
+            x += predictor[0]
+            lam += predictor[1]
         else:
-            adq = dot(a, dq) + b
-            if adq == 0.0 or not math.isfinite(adq):
-                reason = "DIVERGED_LINEAR_SOLVE"
+            tangent()
+            if not self._solve_linear(q, dq):
+                reason, ok = "DIVERGED_LINEAR_SOLVE", False
             else:
-                dlam = (ds - g_now) / adq
-                x += dlam * dq
-                lam += dlam
+                adq = dot(a, dq) + b
+                if adq == 0.0 or not math.isfinite(adq):
+                    reason, ok = "DIVERGED_LINEAR_SOLVE", False
+                else:
+                    dlam = (ds - g_now) / adq
+                    x += dlam * dq
+                    lam += dlam
+        if ok:
+            rn = evaluate(x, lam)
+            ref = self._reference()
+            history.append(rn)
+            uphill = 0
+            while True:
+                if constraint is not None:
+                    g_now, a, b = constraint()
+                    c = g_now - ds
+                else:
+                    c = dot(a, x - xc) + b * (lam - lam_c) - ds
+                if rn <= self.rtol * ref and abs(c) <= ctol * cscale:
+                    converged, reason = True, "CONVERGED_FNORM_ABS"
+                    break
+                if its >= self.max_it or not math.isfinite(rn):
+                    reason = "DIVERGED_MAX_IT" if math.isfinite(rn) else "DIVERGED_FNORM_NAN"
+                    break
+                its += 1
+                tangent()
+                if not (self._solve_linear(-r, dr) and self._solve_linear(q, dq)):
+                    reason = "DIVERGED_LINEAR_SOLVE"
+                    break
+                adq = dot(a, dq) + b
+                if adq == 0.0 or not math.isfinite(adq):
+                    reason = "DIVERGED_LINEAR_SOLVE"
+                    break
+                dlam = -(c + dot(a, dr)) / adq
+                du = dr + dlam * dq
+                # the full step if it lowers |r|; else the critical point of the
+                # line (r·Δu = 0, the energy's minimum along it where the forces
+                # derive from one: a law's kink crossed by the step — a joint
+                # closing, a sliding point reversing — makes |r| jump while r·Δu
+                # stays continuous, and backtracking on |r| alone then orbits
+                # between two states); else backtracking on |r|. The constraint is
+                # linear: any fraction of the step keeps a·Δu on its way to ds.
+                x0, lam0, rn0 = x.copy(), lam, rn
+                g0 = dot(r, du)
+                x = x0 + du
+                lam = lam0 + dlam
                 rn = evaluate(x, lam)
-                ref = self._reference()
-                history.append(rn)
-                uphill = 0
-                while True:
-                    if constraint is not None:
-                        g_now, a, b = constraint()
-                        c = g_now - ds
-                    else:
-                        c = dot(a, x - xc) + b * (lam - lam_c) - ds
-                    if rn <= self.rtol * ref and abs(c) <= ctol * cscale:
-                        converged, reason = True, "CONVERGED_FNORM_ABS"
-                        break
-                    if its >= self.max_it or not math.isfinite(rn):
-                        reason = "DIVERGED_MAX_IT" if math.isfinite(rn) else "DIVERGED_FNORM_NAN"
-                        break
-                    its += 1
-                    tangent()
-                    if not (self._solve_linear(-r, dr) and self._solve_linear(q, dq)):
-                        reason = "DIVERGED_LINEAR_SOLVE"
-                        break
-                    adq = dot(a, dq) + b
-                    if adq == 0.0 or not math.isfinite(adq):
-                        reason = "DIVERGED_LINEAR_SOLVE"
-                        break
-                    dlam = -(c + dot(a, dr)) / adq
-                    du = dr + dlam * dq
-                    # the full step if it lowers |r|; else the critical point of the
-                    # line (r·Δu = 0, the energy's minimum along it where the forces
-                    # derive from one: a law's kink crossed by the step — a joint
-                    # closing, a sliding point reversing — makes |r| jump while r·Δu
-                    # stays continuous, and backtracking on |r| alone then orbits
-                    # between two states); else backtracking on |r|. The constraint is
-                    # linear: any fraction of the step keeps a·Δu on its way to ds.
-                    x0, lam0, rn0 = x.copy(), lam, rn
-                    g0 = dot(r, du)
-                    x = x0 + du
-                    lam = lam0 + dlam
-                    rn = evaluate(x, lam)
-                    if rn >= rn0:
-                        found = self._critical_point(g0, dot(r, du), x0, lam0, du, dlam,
-                                                     evaluate, r)
-                        if found is None:
-                            alpha = 0.5
-                            for _ in range(max_backtracks):
-                                x = x0 + alpha * du
-                                lam = lam0 + alpha * dlam
-                                rn = evaluate(x, lam)
-                                if rn < rn0 or alpha < 0.5 ** max_backtracks:
-                                    break
-                                alpha *= 0.5
-                        else:  # the state is left at the fraction found
-                            alpha, rn = found
+                if rn >= rn0:
+                    found = self._critical_point(g0, dot(r, du), x0, lam0, du, dlam,
+                                                 evaluate, r)
+                    if found is None:
+                        alpha = 0.5
+                        for _ in range(max_backtracks):
                             x = x0 + alpha * du
                             lam = lam0 + alpha * dlam
-                    ref = self._reference()
-                    history.append(rn)
-                    if rn >= rn0:
-                        uphill += 1
-                        if uphill > max_uphill:
-                            reason = "DIVERGED_LINE_SEARCH"
-                            break
+                            rn = evaluate(x, lam)
+                            if rn < rn0 or alpha < 0.5 ** max_backtracks:
+                                break
+                            alpha *= 0.5
+                    else:  # the state is left at the fraction found
+                        alpha, rn = found
+                        x = x0 + alpha * du
+                        lam = lam0 + alpha * dlam
+                ref = self._reference()
+                history.append(rn)
+                if rn >= rn0:
+                    uphill += 1
+                    if uphill > max_uphill:
+                        reason = "DIVERGED_LINE_SEARCH"
+                        break
         ref = self._reference() if converged else max(self._ref, 1.0)
         if converged:
             if commit:
@@ -1205,8 +1222,15 @@ class StaticSolver:
         step = float(increment)
         status = None
         steps = 0
+        # the secant predictor: the previous increment of the displacement measure
+        # (Δx, Δλ, its a·Δx), scaled to the next one (see _arc_increment)
+        x_start = np.zeros(self.n_local)
+        secant: tuple[np.ndarray, float, float] | None = None
         while steps < max_steps:
             d_now = run.displacements[-1]
+            self._gather(x_start)
+            lam_start = self.load_factor
+            plain = False  # this increment moved the displacement measure directly
             ds = min(step, max_displacement - d_now) if math.isfinite(max_displacement) else step
             if ds <= 1e-12 * max(abs(max_displacement), 1.0):
                 break
@@ -1218,6 +1242,7 @@ class StaticSolver:
                 # dissipation control, at the fraction that worked last (grown after an
                 # easy increment)
                 res, _ = self._arc_increment(min(dmin, ds), a, q)
+                plain = res.converged
                 if res.converged:
                     in_snap = False
                     diss, step = None, dmin
@@ -1232,7 +1257,16 @@ class StaticSolver:
                         diss = min(frac * (grow if res.iterations <= easy_iterations
                                            else 1.0), 0.05)
             elif control == "arc-length":
-                res, _ = self._arc_increment(ds, a, q)
+                pred = None
+                if secant is not None and secant[2] > 0.0:
+                    f = ds / secant[2]
+                    pred = (f * secant[0], f * secant[1])
+                res, _ = self._arc_increment(ds, a, q, predictor=pred)
+                if not res.converged and pred is not None:
+                    # then the tangent's predictor
+                    run.results.append(res)
+                    res, _ = self._arc_increment(ds, a, q)
+                plain = res.converged
                 if (not res.converged and dissipation and peak > 0 and d_now > 0
                         and step <= dmin * (1 + 1e-12)):
                     # no equilibrium at the next displacement near this state: the path
@@ -1271,6 +1305,13 @@ class StaticSolver:
                 step = max(0.5 * step, dmin)
                 continue
             steps += 1
+            if plain:
+                x_now = np.zeros(self.n_local)
+                self._gather(x_now)
+                dx = x_now - x_start
+                secant = (dx, self.load_factor - lam_start, dot(a, dx))
+            else:
+                secant = None
             d = measure() - d_start
             lam = load()
             dd, dl = d - run.displacements[-1], lam - run.loads[-1]

@@ -13,6 +13,11 @@ stiffnesses in Pa/m, fracture energies in J/m² = N/m):
   degrade together (the paper's coupled, isotropic softening), each mode driven by its
   own plastic displacement κ1 (opening) and κ2 (slip); with R → 0 the law is Coulomb
   friction without tension, i.e. frictional contact;
+* cohesionless (f_t = c = 0: a sand layer, a dry joint): where the faces are not pressed
+  (Δn ≥ Δn_p) they carry nothing and the opening is a gap, not plastic: they close again
+  where they parted, and the tangential spring is relaxed while open (Δs_p follows Δs).
+  (A plastic opening, as the tension cut-off returns, would put every open point exactly
+  on the kink between contact and separation at every committed state.)
 * dilatancy tan ψ = tan ψ0 · ⟨1 − σ/σ_u⟩ · exp(−δ κ2): it vanishes under the confining
   stress σ_u < 0 and decays with slip;
 * cap hardening/softening (Lourenço's three branches): σ̄_c = f_c/3 → f_c at κ3 = κ_p
@@ -257,6 +262,27 @@ def interface_law(p, dn, ds, s0, s1):
     k2 = s0[S_K2]
     k3 = s0[S_K3]
     diss = s0[S_DISS]
+    if p[P_FT] == 0.0 and p[P_C] == 0.0 and dn - dnp >= 0.0:
+        # cohesionless and not pressed (a sand layer, a dry joint): a gap, not a plastic
+        # opening. The faces carry nothing and close where they parted (dn = dnp), and
+        # the tangential spring is relaxed (dsp follows ds), so the point recloses
+        # without a stale shear. A plastic opening (dnp = dn, as the tension cut-off of
+        # a joint with strength returns) would leave every open point exactly on the
+        # kink between contact and separation at every committed state — Newton then
+        # toggles such points from one iteration to the next — and would press a
+        # reopened joint at once on any reversal of its opening.
+        s1[S_DNP] = dnp
+        s1[S_DSP] = ds
+        s1[S_K1] = k1
+        s1[S_K2] = k2
+        s1[S_K3] = k3
+        s1[S_STATUS] = OPEN if dn > 0.0 else SLIDING
+        s1[S_SN] = 0.0
+        s1[S_TS] = 0.0
+        s1[S_DISS] = diss
+        s1[S_DN] = dn
+        s1[S_DS] = ds
+        return
     slid = False
     for _ in range(6):
         active = False
