@@ -850,7 +850,7 @@ class StaticSolver:
                 x = x0 + du
                 lam = lam0 + dlam
                 rn = evaluate(x, lam)
-                if rn >= rn0:
+                if not rn < rn0:  # (NaN too: a state no law can take)
                     found = self._critical_point(g0, dot(r, du), x0, lam0, du, dlam,
                                                  evaluate, r)
                     if found is None:
@@ -868,7 +868,7 @@ class StaticSolver:
                         lam = lam0 + alpha * dlam
                 ref = self._reference()
                 history.append(rn)
-                if rn >= rn0:
+                if not rn < rn0:
                     uphill += 1
                     if uphill > max_uphill:
                         reason = "DIVERGED_LINE_SEARCH"
@@ -1024,14 +1024,15 @@ class StaticSolver:
 
     def _dissipation_step(self, q: np.ndarray, work: float,
                           fractions: Sequence[float] = (0.05, 0.0125, 0.003, 0.0008, 0.0002)
-                          ) -> tuple[list[NewtonResult], float]:
+                          ) -> tuple[list[NewtonResult], float, bool]:
         """Increments under dissipation control from the committed state, prescribing
         ``fractions`` of ``work`` [J] in turn (5 % down to 0.02 %) as the energy the
         joints' laws dissipate (their own account: plastic work of the
         return mapping, exact; its gradient by finite differences); stops at the first
-        that converges. Returns every result (the last the one that counts) and the
-        fraction of the last. Failing every fraction, the first three are tried with
-        the Gutiérrez estimate below.
+        that converges. Returns every result (the last the one that counts), the
+        fraction of the last, and whether it was the joints' own dissipation (True) or
+        the fallback: failing every fraction, the first three are tried with the
+        Gutiérrez estimate below.
 
         The energy is the laws' own, not the Gutiérrez (2004) estimate
         ½ [f_ext(λ_c)·Δu − Δλ q·u_c]: that estimate assumes secant unloading (damage),
@@ -1046,7 +1047,7 @@ class StaticSolver:
                                          ctol=1e-4)
             out.append(res)
             if res.converged:
-                return out, frac
+                return out, frac, True
         # last, Gutiérrez's secant estimate (linear in the increment): where the joints'
         # own account finds no step it may still find an equilibrium to go on from —
         # every state it reaches is one, though it may lie on an unloading line
@@ -1062,7 +1063,7 @@ class StaticSolver:
             out.append(res)
             if res.converged:
                 break
-        return out, frac
+        return out, frac, False
 
     def follow(
         self,
@@ -1118,12 +1119,15 @@ class StaticSolver:
         Δλ q·u_c] (it may also step along an elastic unloading line); failing that, the
         state a jack holding the displacement would jump to (:meth:`_jump`). Each
         increment that follows tries the displacement measure's smallest increment first
-        — an equilibrium at the next displacement ends the snap-back — and else stays
-        under dissipation control, at the fraction that converged last (grown by
-        ``grow`` after an easy one, at most 5 %), until the displacement measure moves
+        (unless the last one moved the measure back) — an equilibrium at the next
+        displacement ends the snap-back — and else stays under dissipation control, at
+        the fraction that converged last (grown by ``grow`` after one of at most twice
+        ``easy_iterations``, at most 5 %), until the displacement measure moves
         forward. Such increments may move the measure backwards; after
-        ``max_stall_steps`` increments without passing the farthest displacement reached
-        (and the load within ``peak_drop`` of its peak) the run ends *not converged*.
+        ``max_stall_steps`` increments that neither pass the farthest displacement
+        reached nor dissipate energy in the joints' own account (the fallback's steps,
+        which may run down and up an unloading line), with the load within ``peak_drop``
+        of its peak, the run ends *not converged*.
 
         Increments: one converging in at most ``easy_iterations`` lets the next grow
         ``grow`` times (up to ``max_increment``, default 8 × ``increment``); one that
@@ -1218,6 +1222,7 @@ class StaticSolver:
         switched = 0  # increments taken under dissipation control
         jumped = 0  # snap-backs passed at a fixed displacement measure (:meth:`_jump`)
         d_far, stall = 0.0, 0  # the farthest displacement; steps since it last grew
+        went_back = False  # the last increment moved the displacement measure back
         diss: float | None = None  # on a snap-back: the fraction of ½ λ d dissipated per step
         step = float(increment)
         status = None
@@ -1235,26 +1240,32 @@ class StaticSolver:
             if ds <= 1e-12 * max(abs(max_displacement), 1.0):
                 break
             in_snap = diss is not None
+            dissipating = False  # this increment dissipated in the joints' own account
             if control == "arc-length" and in_snap:
                 # on a snap-back: first the displacement measure's smallest increment (an
                 # equilibrium ahead at the next displacement ends the snap-back, as a
-                # jack under displacement control would jump to it); else go on under
+                # jack under displacement control would jump to it) — unless the last
+                # increment went back, the path still turning away; else go on under
                 # dissipation control, at the fraction that worked last (grown after an
-                # easy increment)
-                res, _ = self._arc_increment(min(dmin, ds), a, q)
-                plain = res.converged
-                if res.converged:
+                # easy increment: up to twice ``easy_iterations``, the constraint being
+                # nonlinear)
+                res = None
+                if not went_back:
+                    res, _ = self._arc_increment(min(dmin, ds), a, q)
+                    plain = res.converged
+                if res is not None and res.converged:
                     in_snap = False
                     diss, step = None, dmin
                 else:
-                    run.results.append(res)
-                    tried, frac = self._dissipation_step(
+                    if res is not None:
+                        run.results.append(res)
+                    tried, frac, dissipating = self._dissipation_step(
                         q, 0.5 * abs(run.loads[-1]) * d_now, (diss, diss / 4.0, diss / 16.0))
                     run.results.extend(tried[:-1])
                     res = tried[-1]
                     if res.converged:
                         switched += 1
-                        diss = min(frac * (grow if res.iterations <= easy_iterations
+                        diss = min(frac * (grow if res.iterations <= 2 * easy_iterations
                                            else 1.0), 0.05)
             elif control == "arc-length":
                 pred = None
@@ -1274,7 +1285,8 @@ class StaticSolver:
                     # control; else find the state a jack holding the displacement
                     # would jump to (the load drops at the next displacement)
                     run.results.append(res)
-                    tried, frac = self._dissipation_step(q, 0.5 * abs(run.loads[-1]) * d_now)
+                    tried, frac, dissipating = self._dissipation_step(
+                        q, 0.5 * abs(run.loads[-1]) * d_now)
                     run.results.extend(tried[:-1])
                     res = tried[-1]
                     if res.converged:
@@ -1324,9 +1336,12 @@ class StaticSolver:
             run.load_factors.append(self.load_factor)
             run.iterations.append(res.iterations)
             peak = max(peak, lam)
+            went_back = dd < 0
             if d > d_far:
                 d_far, stall = d, 0
-            else:
+            elif not dissipating:
+                # (an increment that dissipated in the joints' own account is progress
+                # along a snap-back, however far back it goes: not counted)
                 stall += 1
                 if stall >= max_stall_steps and lam > (1.0 - peak_drop) * peak:
                     status = RunStatus(

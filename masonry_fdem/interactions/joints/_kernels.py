@@ -373,6 +373,13 @@ def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
     ty = (X[a1, 1] + u[2 * a1 + 1] - X[a0, 1] - u[2 * a0 + 1]) + (
         X[b0, 1] + u[2 * b0 + 1] - X[b1, 1] - u[2 * b1 + 1])
     ln = math.sqrt(tx * tx + ty * ty)
+    if not ln > 0.0:
+        # the two facets turned into opposite directions (or collapsed): no frame. Only
+        # a wild Newton iterate gets here; NaN forces make its residual reject it
+        for k in range(8):
+            fl[k] = math.nan
+        s1q[:] = s0q
+        return
     tx /= ln
     ty /= ln
     nx = ty
