@@ -1137,7 +1137,9 @@ class StaticSolver:
         Status (the loads: λ for arc length, the reaction [N] for displacement
         control): *peak passed* once the load has fallen ``stop_drop`` below its
         maximum (the run then stops), or at the end of the run if it fell at least
-        ``peak_drop`` below it; else at ``max_displacement`` [m] (of the measure) a
+        ``peak_drop`` below it — a fall counted only in states that prove the peak
+        passed: at the farthest displacement reached, or dissipating more in the joints'
+        own account (not on the way down an unloading line); else at ``max_displacement`` [m] (of the measure) a
         *mechanism* if the current stiffness parameter (Bergan et al. 1978) of the last
         step is below ``mechanism_ratio`` (the load no longer rising), *displacement
         limit reached* otherwise; *load reached* once the load reaches ``max_load``
@@ -1223,6 +1225,8 @@ class StaticSolver:
         jumped = 0  # snap-backs passed at a fixed displacement measure (:meth:`_jump`)
         d_far, stall = 0.0, 0  # the farthest displacement; steps since it last grew
         went_back = False  # the last increment moved the displacement measure back
+        fallen = 0.0  # the largest fall below the peak in states that prove it passed
+        astray = False  # a fallback step taken since the farthest displacement
         diss: float | None = None  # on a snap-back: the fraction of ½ λ d dissipated per step
         step = float(increment)
         status = None
@@ -1307,10 +1311,10 @@ class StaticSolver:
                     lam = run.loads[-1]
                     detail = (f"Newton did not converge ({res.reason}) at displacement "
                               f"{d_now + ds:.4g} m after cut-backs to {dmin:.3g} m")
-                    fell = peak > 0 and lam <= (1.0 - peak_drop) * peak
+                    fell = peak > 0 and fallen >= peak_drop
                     status = RunStatus(Status.PEAK_PASSED if fell else Status.NOT_CONVERGED,
                                        lam, peak, None if fell else d_now + ds,
-                                       ("the load had fallen " f"{100 * (1 - lam / peak):.0f} % "
+                                       ("the load had fallen " f"{100 * fallen:.0f} % "
                                         "below its peak; then " if fell else "") + detail,
                                        at_kind="displacement")
                     break
@@ -1335,6 +1339,7 @@ class StaticSolver:
             run.displacements.append(d)
             run.load_factors.append(self.load_factor)
             run.iterations.append(res.iterations)
+            new_peak = lam > peak
             peak = max(peak, lam)
             went_back = dd < 0
             if d > d_far:
@@ -1343,13 +1348,32 @@ class StaticSolver:
                 # (an increment that dissipated in the joints' own account is progress
                 # along a snap-back, however far back it goes: not counted)
                 stall += 1
-                if stall >= max_stall_steps and lam > (1.0 - peak_drop) * peak:
-                    status = RunStatus(
-                        Status.NOT_CONVERGED, lam, peak, d_far,
-                        f"{stall} increments (under dissipation control) without getting "
-                        f"past displacement {d_far:.4g} m: the path runs back and forth "
-                        "there", at_kind="displacement")
-                    break
+            # how far the load has fallen below its peak, read only where that proves
+            # a peak passed: at the farthest displacement yet, or in a state that
+            # dissipated more in the joints' own account on a path that has taken no
+            # fallback step since it last was at the farthest displacement. Not on the
+            # way down an unloading line (the Gutiérrez fallback's steps may run down
+            # one, and dissipation control may go on from there): a load that falls
+            # there says nothing of what the structure carries further on
+            if d >= d_far:
+                astray = False
+            elif not (plain or dissipating):
+                astray = True  # a fallback's step, behind the farthest displacement
+            if new_peak:
+                fallen = 0.0
+            elif peak > 0 and (d >= d_far or (dissipating and not astray)):
+                fallen = max(fallen, 1.0 - lam / peak)
+            if stall >= max_stall_steps:
+                msg = (f"{stall} increments (under dissipation control) without getting "
+                       f"past displacement {d_far:.4g} m: the path runs back and forth there")
+                if fallen >= peak_drop:
+                    status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
+                                       f"the load had fallen {100 * fallen:.0f} % below its "
+                                       f"peak; then {msg}")
+                else:
+                    status = RunStatus(Status.NOT_CONVERGED, lam, peak, d_far, msg,
+                                       at_kind="displacement")
+                break
             if in_snap and dd > 0:
                 # the snap-back is over: back to the displacement measure, from its
                 # smallest increment
@@ -1360,7 +1384,7 @@ class StaticSolver:
                 status = RunStatus(Status.LOAD_REACHED, lam, peak, None,
                                    f"carried {lam:.6g} >= max_load = {max_load:.6g}")
                 break
-            if peak > 0 and lam <= (1.0 - stop_drop) * peak:
+            if peak > 0 and fallen >= stop_drop:
                 status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
                                    f"the load fell to {100 * lam / peak:.0f} % of its peak "
                                    f"at displacement {d:.4g} m")
@@ -1371,9 +1395,9 @@ class StaticSolver:
             lam = run.loads[-1]
             d = run.displacements[-1]
             sp = k_last / k0 if (k0 and k_last is not None) else math.nan
-            if peak > 0 and lam <= (1.0 - peak_drop) * peak:
+            if peak > 0 and fallen >= peak_drop:
                 status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
-                                   f"the load fell to {100 * lam / peak:.0f} % of its peak by "
+                                   f"the load fell {100 * fallen:.0f} % below its peak by "
                                    f"displacement {d:.4g} m")
             elif steps >= max_steps:
                 status = RunStatus(Status.NOT_CONVERGED, lam, peak, d,
