@@ -1119,7 +1119,7 @@ class StaticSolver:
         Δλ q·u_c] (it may also step along an elastic unloading line); failing that, the
         state a jack holding the displacement would jump to (:meth:`_jump`). Each
         increment that follows tries the displacement measure's smallest increment first
-        (unless the last one moved the measure back) — an equilibrium at the next
+        — an equilibrium at the next
         displacement ends the snap-back — and else stays under dissipation control, at
         the fraction that converged last (grown by ``grow`` after one of at most twice
         ``easy_iterations``, at most 5 %), until the displacement measure moves
@@ -1139,7 +1139,9 @@ class StaticSolver:
         maximum (the run then stops), or at the end of the run if it fell at least
         ``peak_drop`` below it — a fall counted only in states that prove the peak
         passed: at the farthest displacement reached, or dissipating more in the joints'
-        own account (not on the way down an unloading line); else at ``max_displacement`` [m] (of the measure) a
+        own account (not on the way down an unloading line) — and the last load is
+        still that far down (a path that came back up near its peak may go higher);
+        else at ``max_displacement`` [m] (of the measure) a
         *mechanism* if the current stiffness parameter (Bergan et al. 1978) of the last
         step is below ``mechanism_ratio`` (the load no longer rising), *displacement
         limit reached* otherwise; *load reached* once the load reaches ``max_load``
@@ -1224,7 +1226,6 @@ class StaticSolver:
         switched = 0  # increments taken under dissipation control
         jumped = 0  # snap-backs passed at a fixed displacement measure (:meth:`_jump`)
         d_far, stall = 0.0, 0  # the farthest displacement; steps since it last grew
-        went_back = False  # the last increment moved the displacement measure back
         fallen = 0.0  # the largest fall below the peak in states that prove it passed
         astray = False  # a fallback step taken since the farthest displacement
         diss: float | None = None  # on a snap-back: the fraction of ½ λ d dissipated per step
@@ -1248,21 +1249,19 @@ class StaticSolver:
             if control == "arc-length" and in_snap:
                 # on a snap-back: first the displacement measure's smallest increment (an
                 # equilibrium ahead at the next displacement ends the snap-back, as a
-                # jack under displacement control would jump to it) — unless the last
-                # increment went back, the path still turning away; else go on under
-                # dissipation control, at the fraction that worked last (grown after an
-                # easy increment: up to twice ``easy_iterations``, the constraint being
+                # jack under displacement control would jump to it; tried even while the
+                # path goes back: skipping it let the anchored repair arch's path run
+                # back to 0.05 mm under a pulling load); else go on under dissipation
+                # control, at the fraction that worked last (grown after an easy
+                # increment: up to twice ``easy_iterations``, the constraint being
                 # nonlinear)
-                res = None
-                if not went_back:
-                    res, _ = self._arc_increment(min(dmin, ds), a, q)
-                    plain = res.converged
-                if res is not None and res.converged:
+                res, _ = self._arc_increment(min(dmin, ds), a, q)
+                plain = res.converged
+                if res.converged:
                     in_snap = False
                     diss, step = None, dmin
                 else:
-                    if res is not None:
-                        run.results.append(res)
+                    run.results.append(res)
                     tried, frac, dissipating = self._dissipation_step(
                         q, 0.5 * abs(run.loads[-1]) * d_now, (diss, diss / 4.0, diss / 16.0))
                     run.results.extend(tried[:-1])
@@ -1311,7 +1310,9 @@ class StaticSolver:
                     lam = run.loads[-1]
                     detail = (f"Newton did not converge ({res.reason}) at displacement "
                               f"{d_now + ds:.4g} m after cut-backs to {dmin:.3g} m")
-                    fell = peak > 0 and fallen >= peak_drop
+                    # (and the load still down: a path that came back up near its
+                    # peak may go higher, so its peak is no collapse load)
+                    fell = peak > 0 and fallen >= peak_drop and lam <= (1 - peak_drop) * peak
                     status = RunStatus(Status.PEAK_PASSED if fell else Status.NOT_CONVERGED,
                                        lam, peak, None if fell else d_now + ds,
                                        ("the load had fallen " f"{100 * fallen:.0f} % "
@@ -1341,7 +1342,6 @@ class StaticSolver:
             run.iterations.append(res.iterations)
             new_peak = lam > peak
             peak = max(peak, lam)
-            went_back = dd < 0
             if d > d_far:
                 d_far, stall = d, 0
             elif not dissipating:
@@ -1366,7 +1366,7 @@ class StaticSolver:
             if stall >= max_stall_steps:
                 msg = (f"{stall} increments (under dissipation control) without getting "
                        f"past displacement {d_far:.4g} m: the path runs back and forth there")
-                if fallen >= peak_drop:
+                if fallen >= peak_drop and lam <= (1 - peak_drop) * peak:
                     status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
                                        f"the load had fallen {100 * fallen:.0f} % below its "
                                        f"peak; then {msg}")
@@ -1395,7 +1395,7 @@ class StaticSolver:
             lam = run.loads[-1]
             d = run.displacements[-1]
             sp = k_last / k0 if (k0 and k_last is not None) else math.nan
-            if peak > 0 and fallen >= peak_drop:
+            if peak > 0 and fallen >= peak_drop and lam <= (1 - peak_drop) * peak:
                 status = RunStatus(Status.PEAK_PASSED, lam, peak, None,
                                    f"the load fell {100 * fallen:.0f} % below its peak by "
                                    f"displacement {d:.4g} m")
