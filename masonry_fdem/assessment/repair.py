@@ -200,11 +200,14 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
     save_load_curve(fig, ax, f"{case.name}: unstrengthened and anchored", tmp / "curves.png")
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6, 5.5), sharex=True)
+    # one colour per anchor (the default cycle has ten: the eleventh repeated the first)
+    cmap = plt.get_cmap("tab10" if len(r1.anchors) <= 10 else "tab20")
     for k, a in enumerate(r1.anchors):
         d = np.asarray(a["distance"])
         mid = 0.5 * (d[1:] + d[:-1])
-        a1.plot(mid, np.asarray(a["force"]) / 1e3, "-", color=f"C{k % 10}", label=a["name"])
-        a2.plot(d, np.asarray(a["slip"]) * 1e3, "-", color=f"C{k % 10}")
+        col = cmap(k % cmap.N)
+        a1.plot(mid, np.asarray(a["force"]) / 1e3, "-", color=col, label=a["name"])
+        a2.plot(d, np.asarray(a["slip"]) * 1e3, "-", color=col)
     if r1.anchors:
         a1.axhline(r1.anchors[0]["yield_force"] / 1e3, color="k", ls="--", lw=0.8,
                    label="yield force")
