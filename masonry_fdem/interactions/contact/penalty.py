@@ -358,23 +358,23 @@ class BlockContact(Interaction):
             free = ~np.isin(keys, self.excluded)
             pairs, keys = pairs[free], keys[free]
         hist = [np.zeros((pairs.shape[0], 2)) for _ in range(4)]
-        if self.keys.size and keys.size:
-            pos = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
-            hit = self.keys[pos] == keys
-            for new, old in zip(hist, (self.tau, self.pmax, self.tau_c, self.pmax_c),
-                                strict=True):
-                if old.shape[0] == self.keys.size:
+        # the trial history from the current pairs; the committed one from the last
+        # commit's pairs when there was one (the current pair set may come from a
+        # rebuild at a failed iterate that lost some of them)
+        cur = (self.keys, self.tau, self.pmax, self.tau_c, self.pmax_c)
+        sources = [(cur[0], cur[1:3], hist[:2])]
+        if self._committed is None:
+            sources.append((cur[0], cur[3:], hist[2:]))
+        else:
+            sources.append((self._committed[0], self._committed[1:], hist[2:]))
+        for old_keys, olds, news in sources:
+            if not (old_keys.size and keys.size):
+                continue
+            pos = np.minimum(np.searchsorted(old_keys, keys), old_keys.size - 1)
+            hit = old_keys[pos] == keys
+            for new, old in zip(news, olds, strict=True):
+                if old.shape[0] == old_keys.size:
                     new[hit] = old[pos[hit]]
-        if self._committed is not None and self._committed[0].size and keys.size:
-            # the committed history from the last commit's pairs (the current pair set
-            # may come from a rebuild at a failed iterate that lost some of them)
-            ck, ctau, cpmax = self._committed
-            pos = np.minimum(np.searchsorted(ck, keys), ck.size - 1)
-            hit = ck[pos] == keys
-            hist[2][:] = 0.0
-            hist[3][:] = 0.0
-            hist[2][hit] = ctau[pos[hit]]
-            hist[3][hit] = cpmax[pos[hit]]
         order = np.argsort(keys, kind="stable")
         self.pairs = np.ascontiguousarray(pairs[order])
         self.keys = keys[order]

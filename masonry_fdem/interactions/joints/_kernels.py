@@ -486,17 +486,8 @@ def joint_tangent(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, rel_step
         if alive[q] == 0:
             continue
         p = props[ipmat[q]]
-        a0 = ipa[q, 0]
-        a1 = ipa[q, 1]
-        b0 = ipb[q, 0]
-        b1 = ipb[q, 1]
-        dofs[0] = 2 * a0
-        dofs[2] = 2 * a1
-        dofs[4] = 2 * b0
-        dofs[6] = 2 * b1
-        for j in range(0, 8, 2):
-            dofs[j + 1] = dofs[j] + 1
-        h = rel_step * math.sqrt((X[a1, 0] - X[a0, 0]) ** 2 + (X[a1, 1] - X[a0, 1]) ** 2)
+        a0, a1, b0, b1 = ipa[q, 0], ipa[q, 1], ipb[q, 0], ipb[q, 1]
+        h = _point_dofs(X, a0, a1, b0, b1, rel_step, dofs)
         point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, f0)
         b_0 = _branch(s0[q], scratch)
         for j in range(8):
@@ -543,21 +534,18 @@ def dissipation_gradient(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, r
     uw = u.copy()
     scratch = np.empty(N_STATE)
     fl = np.empty(8)
+    dofs = np.empty(8, dtype=np.int64)
     total = 0.0
     for q in range(ipa.shape[0]):
         if alive[q] == 0:
             continue
         p = props[ipmat[q]]
-        a0 = ipa[q, 0]
-        a1 = ipa[q, 1]
-        b0 = ipb[q, 0]
-        b1 = ipb[q, 1]
+        a0, a1, b0, b1 = ipa[q, 0], ipa[q, 1], ipb[q, 0], ipb[q, 1]
         point_forces(X, uw, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], scratch, fl)
         total += w[q] * (scratch[S_DISS] - s0[q, S_DISS])
-        h = rel_step * math.sqrt((X[a1, 0] - X[a0, 0]) ** 2 + (X[a1, 1] - X[a0, 1]) ** 2)
+        h = _point_dofs(X, a0, a1, b0, b1, rel_step, dofs)
         for j in range(8):
-            node = a0 if j < 2 else (a1 if j < 4 else (b0 if j < 6 else b1))
-            k = 2 * node + (j % 2)
+            k = dofs[j]
             u0 = uw[k]
             hk = max(h, rel_step * abs(u0))
             up = u0 + hk
@@ -571,6 +559,19 @@ def dissipation_gradient(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, r
             uw[k] = u0
             g[k] += w[q] * (dp - dm) / (up - um)
     return total
+
+
+@njit(cache=True)
+def _point_dofs(X, a0, a1, b0, b1, rel_step, dofs):
+    """The 8 dofs of a point's facet nodes (a0, a1, b0, b1; x then y) into ``dofs``;
+    returns the finite-difference step, ``rel_step`` × the side-A facet length [m]."""
+    dofs[0] = 2 * a0
+    dofs[2] = 2 * a1
+    dofs[4] = 2 * b0
+    dofs[6] = 2 * b1
+    for j in range(0, 8, 2):
+        dofs[j + 1] = dofs[j] + 1
+    return rel_step * math.sqrt((X[a1, 0] - X[a0, 0]) ** 2 + (X[a1, 1] - X[a0, 1]) ** 2)
 
 
 @njit(cache=True)
