@@ -11,7 +11,6 @@ response is quasi-static.
 from __future__ import annotations
 
 import numpy as np
-import pytest
 from conftest import alternating_grid
 
 from masonry_fdem import Material, Model

@@ -227,20 +227,14 @@ class StaticSolver:
         self.J.setType(PETSc.Mat.Type.AIJ)
         self._pattern: tuple[np.ndarray, np.ndarray] | None = None
         self.pattern_builds = 0
-        self.snes = PETSc.SNES().create(comm=comm)
-        self.snes.setOptionsPrefix(options_prefix)
         opts = PETSc.Options()
         self._prefix = options_prefix
         chosen = {**DEFAULT_OPTIONS, **(options or {})}
         for key, value in chosen.items():
             if options and key in options or not opts.hasName(options_prefix + key):
                 opts[options_prefix + key] = value
-        self.snes.setFunction(self._residual_cb, self.F)
-        self.snes.setJacobian(self._jacobian_cb, self.J)
-        self.snes.setConvergenceTest(self._converged_cb)
-        self.snes.setTolerances(max_it=self.max_it)
-        self.snes.setFromOptions()
-        self.snes.getKSP().setFromOptions()
+        self.snes: PETSc.SNES | None = None
+        self._make_snes()
         self._x_at_forces = np.full(nloc, np.nan)
         self._load_factor = 0.0
         #: the load factor of the committed state
@@ -440,7 +434,7 @@ class StaticSolver:
         else:
             # a failed solve may leave the preconditioner failed (a zero pivot): set it
             # up afresh next time
-            self.snes.getKSP().getPC().reset()
+            self._make_snes()
             self.restore()
         res = NewtonResult(float(load_factor), converged, int(its), rn, self._ref,
                            _reason_name(reason), tuple(self._history))
@@ -450,6 +444,24 @@ class StaticSolver:
                      load_factor, "converged" if converged else "NOT converged", its,
                      res.relative_residual, res.reason)
         return res
+
+    def _make_snes(self) -> None:
+        """A new SNES (and its KSP and line search) on the solver's options. Made again
+        after a failed solve: the critical-point line search keeps the norms of the last
+        step it took, and after a diverged solve (steps of 1e20) its test
+        ``dot(F, Y) < atol·‖y‖`` with that stale ‖y‖ rejected the first step of every
+        later solve (seen on the shear wall under displacement control); a failed
+        factorization (a zero pivot) is dropped with it."""
+        if self.snes is not None:
+            self.snes.destroy()
+        self.snes = snes = PETSc.SNES().create(comm=self.comm)
+        snes.setOptionsPrefix(self._prefix)
+        snes.setFunction(self._residual_cb, self.F)
+        snes.setJacobian(self._jacobian_cb, self.J)
+        snes.setConvergenceTest(self._converged_cb)
+        snes.setTolerances(max_it=self.max_it)
+        snes.setFromOptions()
+        snes.getKSP().setFromOptions()
 
     def commit(self) -> None:
         """Accept the current state: displacements, the blocks' material state and every
@@ -1303,7 +1315,19 @@ class StaticSolver:
             else:
                 target = d0 + sign * (d_now + ds)
                 disp = {prescription: (target, None) if component == 0 else (None, target)}
-                res = self.solve(self.load_factor, displacement=disp)
+                res = None
+                if secant is not None and secant[2] > 0.0:
+                    # start from the previous increment's step, scaled: a drive that
+                    # jumps alone shears the joints beside it far past their strength at
+                    # the first iterate (the wall's top bed joint), and Newton from there
+                    # diverges where the secant's start converges
+                    self._scatter(x_start + (ds / secant[2]) * secant[0])
+                    res = self.solve(self.load_factor, displacement=disp)
+                    if not res.converged:
+                        run.results.append(res)
+                if res is None or not res.converged:
+                    res = self.solve(self.load_factor, displacement=disp)
+                plain = res.converged
             run.results.append(res)
             if not res.converged:
                 if step <= dmin * (1 + 1e-12) or in_snap:
@@ -1326,7 +1350,8 @@ class StaticSolver:
                 x_now = np.zeros(self.n_local)
                 self._gather(x_now)
                 dx = x_now - x_start
-                secant = (dx, self.load_factor - lam_start, dot(a, dx))
+                secant = (dx, self.load_factor - lam_start,
+                          dot(a, dx) if control == "arc-length" else ds)
             else:
                 secant = None
             d = measure() - d_start
