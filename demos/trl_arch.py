@@ -139,6 +139,12 @@ if comm.rank == 0:
         e = a.events[0]
         print(f"  anchored: first hinge {e.joint} ({e.kind}) at {e.load / 1e3:.1f} kN = "
               f"{e.load / a.peak_load:.2f} of its largest load (test: 28 t/41 t = 0.68)")
+    for name, r in (("unstrengthened", u), ("anchored", a)):
+        print(f"  {name}: ring separation (widest opening over the run; x-extent opened "
+              f"by more than {r.ring_separation[0]['threshold'] * 1e3:.2f} mm, of the span): "
+              + "; ".join(f"below ring {x['layer']} {x['max_opening'] * 1e3:.3f} mm over "
+                          f"{100 * x['span_fraction']:.0f} % at {x['load'] / 1e3:.1f} kN"
+                          for x in r.ring_separation))
     if a.anchor_peaks:
         top = max(a.anchor_peaks, key=lambda x: x["force_max"])
         print(f"  largest bar force over the anchored run: {top['name']} "

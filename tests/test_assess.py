@@ -392,3 +392,42 @@ def test_reference_arch_hinges_from_mortar_states():
     assert s_mid[3] > 0.95  # the far springing
     # every zone through the three rings
     assert all({e.joint.split()[1] for e in z} == {"0", "1", "2"} for z in zones)
+
+
+@pytest.mark.parametrize("delta,separated", [(2e-3, True), (1e-4, False)])
+def test_ring_separation_measure_of_a_radial_lift(delta, separated):
+    """Each ring r lifted radially by r·δ opens every layer between rings by exactly δ:
+    the widest opening is δ (to the cosine of half an interface's angle), and the layer between rings r−1 and r is separated over
+    the chord of its radius R + r t (2 (R + r t) / span of the span, semicircular arch)
+    when δ exceeds the threshold of 1e-3 × t = 0.15 mm, over none of it below."""
+    from masonry_fdem.assessment.assess import _RingMonitor, build_model
+    from masonry_fdem.geometry.arches import arch_centre
+
+    d = {"arch": {"span": 2.0, "rings": 3, "ring_thickness": 0.15, "voussoirs": [8, 9, 10],
+                  "abutment_height": 0.3, "abutment_width": 0.6, "mesh_size": 0.15},
+         "materials": copy.deepcopy(DRY_ARCH["materials"]),
+         "joints": {"mortar": {"tan_phi": 0.8}}, "analysis": {"limit_analysis": False}}
+    case = load_case(d, name="lift")
+    model, _, _ = build_model(case, comm=MPI.COMM_SELF)
+    mon = _RingMonitor(case, model)
+    names = model.blocks.block_names
+    ring = np.array([int(names[b].split(":")[1]) if names[b].startswith("voussoir") else 0
+                     for b in model.node_block])
+    a = case.arch
+    x = model.X
+    c = np.array([arch_centre(a.kind, a.span, a.rise, xi) for xi in x[:, 0]])
+    radial = (x - c) / np.linalg.norm(x - c, axis=1)[:, None]
+    model.u.x.array[:] = ((ring * delta)[:, None] * radial).ravel()
+    out = mon.layers()
+    R, t = a.span / 2, a.ring_thickness
+    print(f"\nlift {delta * 1e3:.2f} mm: " + "; ".join(
+        f"layer {x['layer']}: {x['max_opening'] * 1e3:.4f} mm over "
+        f"{100 * x['span_fraction']:.2f} %" for x in out))
+    assert [x["layer"] for x in out] == [1, 2]
+    for x_ in out:
+        assert x_["threshold"] == pytest.approx(1e-3 * t)
+        # (an interface is a chord: its normal differs from the radial direction at its
+        # ends by half its angle, a few degrees here)
+        assert delta * np.cos(np.pi / 16) <= x_["max_opening"] <= delta * (1 + 1e-9)
+        want = 2 * (R + x_["layer"] * t) / a.span if separated else 0.0
+        assert x_["span_fraction"] == pytest.approx(want, rel=1e-9, abs=1e-12)

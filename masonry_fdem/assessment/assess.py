@@ -137,6 +137,12 @@ class Assessment:
         anchor_peaks: per anchor, its largest bar force over the whole run [N]
             (``force_max``), the load-line displacement [m] and the load [N] where it
             occurred, and ``yield_force`` [N] (empty without anchors).
+        ring_separation: per layer between rings (``layer``: the ring above it), the
+            state where it opened widest over the run: ``max_opening`` [m], the
+            ``span_fraction`` over which it was separated then (both ends of an
+            interface opened by more than ``threshold`` [m], 1e-3 × the ring thickness,
+            beyond the self-weight state), and the ``load`` [N] and load-line
+            ``displacement`` [m] there (empty for a single ring).
     """
 
     case: str
@@ -162,6 +168,7 @@ class Assessment:
     anchor_length: float = 0.0
     stopped_under: str = "load"
     anchor_peaks: list[dict] = field(default_factory=list)
+    ring_separation: list[dict] = field(default_factory=list)
 
     @property
     def collapse_load(self) -> float | None:
@@ -389,6 +396,80 @@ class _JointMonitor:
                           float(s), float(load), float(disp))
 
 
+class _RingMonitor:
+    """Radial openings of the interfaces between rings (the sand or collar layers), at
+    both ends of each interface, minus the self-weight state's (collective).
+
+    A layer counts as separated where it has opened by more than ``SEPARATION`` × the
+    ring thickness beyond the self-weight state: 1e-3 × 0.109 m = 0.11 mm on the TRL arch,
+    fifty times the elastic decompression of its sand layers under self-weight (about
+    10 kPa / 5e9 Pa/m = 2 µm); a cohesionless layer has no tensile strength, so any
+    clear opening is a separation."""
+
+    SEPARATION = 1e-3
+
+    def __init__(self, case: ArchCase, model):
+        from masonry_fdem.solvers.limit_analysis import find_interfaces
+
+        layout = case.layout()
+        itf = find_interfaces(layout)
+        names = list(model.blocks.block_names)
+        self.model, self.span = model, case.arch.span
+        self.threshold = self.SEPARATION * case.arch.ring_thickness
+        rows = []
+        for i in range(itf.size):
+            na, nb = layout.names[itf.block_a[i]], layout.names[itf.block_b[i]]
+            where = classify_interface(na, nb, case.arch)
+            if where is not None and where[0] == "ring":
+                rows.append((i, where[1], names.index(na), names.index(nb)))
+        n = len(rows)
+        self.layer = np.array([r[1] for r in rows], dtype=np.int64)  # the upper ring
+        self.ends = np.zeros((n, 2, 2))
+        self.normal = np.zeros((n, 2))
+        self.node = -np.ones((n, 2, 2), dtype=np.int64)
+        cent = np.array([np.mean(p, axis=0) for p in layout.polygons])
+        for k, (i, _, ba, bb) in enumerate(rows):
+            p0, p1 = itf.start[i], itf.end[i]
+            self.ends[k] = (p0, p1)
+            t = (p1 - p0) / np.linalg.norm(p1 - p0)
+            nrm = np.array([-t[1], t[0]])
+            if np.dot(nrm, cent[itf.block_b[i]] - cent[itf.block_a[i]]) < 0:
+                nrm = -nrm
+            self.normal[k] = nrm
+            for side, b in enumerate((ba, bb)):
+                own = np.flatnonzero(model.node_block == b)
+                for e in range(2):
+                    if own.size:
+                        d = np.linalg.norm(model.X[own] - self.ends[k, e], axis=1)
+                        self.node[k, e, side] = own[int(np.argmin(d))]
+        self.extent = np.abs(self.ends[:, 1, 0] - self.ends[:, 0, 0])  # [m] along x
+        self.base = np.zeros((n, 2))
+
+    def openings(self) -> np.ndarray:
+        """``(n, 2)`` opening [m] at both ends of each ring interface (positive: open)."""
+        u = self.model.u.x.array.reshape(-1, 2)
+        du = np.zeros((len(self.layer), 2, 2, 2))
+        ok = self.node >= 0
+        du[ok] = u[self.node[ok]]
+        du = self.model.comm.allreduce(du)
+        rel = du[:, :, 1, :] - du[:, :, 0, :]
+        return np.einsum("kej,kj->ke", rel, self.normal) - self.base
+
+    def layers(self) -> list[dict]:
+        """Per layer (``layer``: the ring above it): the largest opening [m] and the
+        fraction of the span [-] over which the layer is separated (both ends of an
+        interface open beyond the threshold) now."""
+        op = self.openings()
+        out = []
+        for r in np.unique(self.layer):
+            mine = self.layer == r
+            sep = mine & (op.min(axis=1) > self.threshold)
+            out.append({"layer": int(r), "max_opening": float(op[mine].max()),
+                        "span_fraction": float(self.extent[sep].sum() / self.span),
+                        "threshold": float(self.threshold)})
+        return out
+
+
 # ---------------------------------------------------------------------------- the run
 def assess(
     case: ArchCase | str | Path | Mapping[str, Any],
@@ -446,6 +527,7 @@ def assess(
 
     model, inter, anchors = build_model(case, comm)
     monitor = _JointMonitor(case, model, next((i for i in inter if i.name == "joints"), None))
+    rings = _RingMonitor(case, model)
     points = case.load_points()
     bar = ProgressBar(f"{case.name}", comm=comm,
                       force=bool(progress)) if progress is not False else None
@@ -503,6 +585,8 @@ def assess(
                                "arch cannot stand, or needs more iterations")
         it0 = res.iterations
     monitor.base = monitor.openings() + monitor.base
+    rings.base = rings.openings() + rings.base
+    separation: dict[int, dict] = {}  # per layer: its widest opening over the run
     loads, disps, iters = [0.0], [0.0], [it0]
     events: list[JointEvent] = []
     seen: set[tuple[int, str]] = set()  # (joint, kind) already in the sequence
@@ -520,6 +604,11 @@ def assess(
         iters.append(int(iterations))
         opened, op = monitor.classify(an.hinge_opening)
         state["open"] = [(k, kind, side, load, disp, op[k]) for k, kind, side in opened]
+        for lay in rings.layers():
+            best = separation.get(lay["layer"])
+            if best is None or lay["max_opening"] > best["max_opening"]:
+                separation[lay["layer"]] = {**lay, "load": float(load),
+                                            "displacement": float(disp)}
         if anchors is not None:
             state["anchors"] = anchor_state(anchors)
             for a in state["anchors"]:
@@ -691,7 +780,8 @@ def assess(
         limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
         anchor_length=0.0 if anchors is None else anchors.total_length,
-        anchor_peaks=list(anchor_peaks.values()))
+        anchor_peaks=list(anchor_peaks.values()),
+        ring_separation=[separation[r] for r in sorted(separation)])
     result.elapsed = time.perf_counter() - t_start
     if comm.rank == 0:
         log.info("%s: %s (%s)", case.name, result.status_line, status.detail)

@@ -240,6 +240,8 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
         "anchors": [{k: v for k, v in a.items() if k not in ("distance", "force", "slip")}
                     for a in r1.anchors],
         "anchor_peaks": r1.anchor_peaks,
+        "unstrengthened_ring_separation": r0.ring_separation,
+        "anchored_ring_separation": r1.ring_separation,
     }
     (tmp / "summary.json").write_text(json.dumps(summary, indent=1))
 

@@ -180,6 +180,18 @@ def _report(case, res, mag: float) -> str:
     lines.append(f"| wall time | {res.elapsed:.0f} s |")
     if res.anchor_peaks:
         lines += ["", "## Anchors", ""] + anchor_peaks_table(res.anchor_peaks)
+    if res.ring_separation:
+        thr = res.ring_separation[0]["threshold"]
+        lines += ["", "## Ring separation", "",
+                  f"Widest opening of each layer between rings over the run, and the part "
+                  f"of the span separated then (opened by more than {thr * 1e3:.2f} mm, "
+                  "1e-3 of the ring thickness, beyond the self-weight state):", "",
+                  "| layer (below ring) | widest opening [mm] | separated over | at load "
+                  "[kN] | at load-line displacement [mm] |", "|---|---|---|---|---|"]
+        for x in res.ring_separation:
+            lines.append(f"| {x['layer']} | {x['max_opening'] * 1e3:.3f} | "
+                         f"{100 * x['span_fraction']:.0f} % of the span | "
+                         f"{x['load'] / 1e3:.2f} | {x['displacement'] * 1e3:.3f} |")
     lines += ["", "## Load–displacement at the load line", "",
               "![load-displacement](load_displacement.png)", "",
               "## Hinge sequence", ""]
