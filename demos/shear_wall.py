@@ -22,7 +22,8 @@
 # f_c = 10.5 MPa, C_s = 9, G_fc = 5 N/mm, κ_p = 0.09 mm; brick cracks f_t = 2.0 MPa,
 # G_fI = 0.08 N/mm. For the walls at 1.21 and 2.12 MPa they lowered the joint values to
 # f_t = 0.16 MPa, G_fI = 0.012 N/mm, c = 0.224 MPa, G_fII = 0.05 N/mm (`--set high`).
-# The tests at 0.30 MPa peaked at about 50 kN (their Fig. comparing J4D/J5D).
+# The tests at 0.30 MPa peaked at about 50 kN (J4D/J5D as Lourenço & Rots compare them;
+# recalled, not re-read here: no copy of the paper was at hand).
 #
 # Run with `python demos/shear_wall.py` or `mpirun -n 2 python demos/shear_wall.py`;
 # `--courses 6 --bricks 2` gives a small wall.
