@@ -86,13 +86,20 @@ def test_run_folder_is_complete(dry_runs):
     res = dry_runs[2000.0]
     folder = res.folder
     names = sorted(p.name for p in folder.iterdir())
-    assert names == ["curve.csv", "hinges.csv", "hinges.png", "load_displacement.png",
-                     "mechanism.png", "report.md", "summary.json"]
+    assert names == ["curve.csv", "first_hinge.png", "hinges.csv", "hinges.png",
+                     "load_displacement.png", "mechanism.png", "peak_load.png", "report.md",
+                     "summary.json"]
     assert not any(p.name.endswith(".partial") for p in folder.parent.iterdir())
     text = (folder / "report.md").read_text(encoding="utf-8")
     assert f"**Status: peak passed — collapse load {res.collapse_load / 1e3:.2f} kN.**" in text
     assert f"**{res.collapse_load / 1e3:.2f} kN**" in text
     assert f"{res.limit_load / 1e3:.2f} kN" in text
+    first = res.events[0]
+    assert first.kind == "hinge"
+    assert (f"At the first hinge: {first.load / 1e3:.2f} kN, {first.displacement * 1e3:.3f} mm"
+            in text)
+    assert f"At the peak load: {res.peak_load / 1e3:.2f} kN" in text
+    assert "![first hinge](first_hinge.png)" in text and "![peak load](peak_load.png)" in text
     status, curve = read_curve(folder / "curve.csv")
     assert status.startswith("peak passed — collapse load") and "% of its peak" in status, status
     assert (folder / "curve.csv").read_text(encoding="utf-8").startswith("# status: peak passed")

@@ -587,6 +587,8 @@ def assess(
     monitor.base = monitor.openings() + monitor.base
     rings.base = rings.openings() + rings.base
     separation: dict[int, dict] = {}  # per layer: its widest opening over the run
+    # deformed states for the report's pictures: at the first hinge and at the peak load
+    snapshots: dict[str, tuple[np.ndarray, float, float]] = {}
     loads, disps, iters = [0.0], [0.0], [it0]
     events: list[JointEvent] = []
     seen: set[tuple[int, str]] = set()  # (joint, kind) already in the sequence
@@ -623,6 +625,10 @@ def assess(
                 seen.add((k, kind))
                 events.append(monitor.event(k, kind, side, len(events) + 1, load, disp,
                                             op[k]))
+        if "first hinge" not in snapshots and any(e.kind == "hinge" for e in events):
+            snapshots["first hinge"] = (model.u.x.array.copy(), float(load), float(disp))
+        if "peak load" not in snapshots or load > snapshots["peak load"][1]:
+            snapshots["peak load"] = (model.u.x.array.copy(), float(load), float(disp))
         if bar is not None:
             bar.update(load / scale, f"{load / 1e3:8.2f} kN  {disp * 1e3:7.3f} mm  "
                        f"{len({k for k, _ in seen})} joints open")
@@ -786,7 +792,8 @@ def assess(
     if comm.rank == 0:
         log.info("%s: %s (%s)", case.name, result.status_line, status.detail)
     if write:
-        write_run_folder(case, result, folder, model, inter, anchors, comm)
+        write_run_folder(case, result, folder, model, inter, anchors, comm,
+                         snapshots=snapshots)
     return result
 
 

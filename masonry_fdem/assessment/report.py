@@ -8,6 +8,8 @@ import shutil
 from dataclasses import asdict
 from pathlib import Path
 
+from mpi4py import MPI
+
 import numpy as np
 
 from masonry_fdem.io.plot import save_load_curve
@@ -16,10 +18,14 @@ from masonry_fdem.io.rundir import hand_over, partial_folder
 __all__ = ["read_curve", "status_text", "write_run_folder"]
 
 
-def write_run_folder(case, res, folder: Path, model, inter, anchors, comm) -> None:
+def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
+                     snapshots: dict | None = None) -> None:
     """Write the run folder of an assessment (collective): the mechanism picture, the
     curve, the hinge sequence and the report, into a hidden folder handed over when
-    complete; ``res.folder`` and ``res.report`` are set."""
+    complete; ``res.folder`` and ``res.report`` are set. ``snapshots`` (``{name: (local
+    displacement array, load [N], load-line displacement [m])}``, e.g. "first hinge" and
+    "peak load") are drawn deformed as ``<name>.png`` (blocks only: the joint and anchor
+    states are those of the end of the run, so they are not drawn there)."""
     from masonry_fdem.io import plot_blocks
 
     tmp = partial_folder(folder)
@@ -42,7 +48,23 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm) -> No
         plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
                     title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
                     joints=inter[1], anchors=anchors)
-        hand_over(lambda t: _write_rank0(case, res, t, mag), tmp, folder, comm)
+        drawn = []
+        if snapshots:
+            now = model.u.x.array.copy()
+            try:
+                for name, (us, load, disp) in snapshots.items():
+                    model.u.x.array[:] = us
+                    um = comm.allreduce(float(np.abs(us).max()) if us.size else 0.0,
+                                        op=MPI.MAX)
+                    m = 0.05 * span / um if um > 0 else 1.0
+                    file = name.replace(" ", "_") + ".png"
+                    plot_blocks(model, tmp / file, field="displacement", scale=m,
+                                title=f"{case.name}: at the {name}, {load / 1e3:.2f} kN, "
+                                      f"{disp * 1e3:.3f} mm (deformed ×{m:.0f})")
+                    drawn.append((name, file, load, disp))
+            finally:
+                model.u.x.array[:] = now
+        hand_over(lambda t: _write_rank0(case, res, t, mag, drawn), tmp, folder, comm)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -52,7 +74,7 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm) -> No
     comm.barrier()
 
 
-def _write_rank0(case, res, tmp: Path, mag: float) -> None:
+def _write_rank0(case, res, tmp: Path, mag: float, drawn=()) -> None:
     import matplotlib
 
     from masonry_fdem.assessment.assess import status_dict
@@ -117,7 +139,7 @@ def _write_rank0(case, res, tmp: Path, mag: float) -> None:
     fig.tight_layout()
     fig.savefig(tmp / "hinges.png", dpi=120)
     plt.close(fig)
-    (tmp / "report.md").write_text(_report(case, res, mag), encoding="utf-8")
+    (tmp / "report.md").write_text(_report(case, res, mag, drawn), encoding="utf-8")
 
 
 def status_text(res) -> str:
@@ -127,7 +149,7 @@ def status_text(res) -> str:
     return f"{res.status_line} ({d})" if d else res.status_line
 
 
-def _report(case, res, mag: float) -> str:
+def _report(case, res, mag: float, drawn=()) -> str:
     a, ld = case.arch, case.loading
     kn = res.peak_load / 1e3
     lines = [f"# Assessment of `{case.name}`", "", f"**Status: {res.status_line}.**", ""]
@@ -207,6 +229,9 @@ def _report(case, res, mag: float) -> str:
               f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
               "![hinges](hinges.png)", "",
               f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
+              *[x for name, file, load, disp in drawn for x in (
+                  "", f"At the {name}: {load / 1e3:.2f} kN, {disp * 1e3:.3f} mm "
+                  "load-line displacement.", "", f"![{name}]({file})")],
               "", "Files: `curve.csv`, `hinges.csv`, `summary.json`.", ""]
     return "\n".join(lines)
 
