@@ -95,8 +95,9 @@ def study(case, out: Path) -> None:
         return
     base = rows[0][3]
     lines = ["# TRL arch: sensitivity of the ratio anchored/unstrengthened", "",
-             f"Case `cases/trl_arch.toml`{' (coarse: a radial joint every other brick)' if args.coarse else ''}"
-             f"; voussoirs {list(case.arch.voussoirs)}. The sand layers' cohesion is zero in "
+             "Case `cases/trl_arch.toml`"
+             + (" (coarse: a radial joint every other brick)" if args.coarse else "")
+             + f"; voussoirs {list(case.arch.voussoirs)}. The sand layers' cohesion is zero in "
              "the case (wet sand, suction neglected), so ±20 % of it changes nothing and "
              "is not run. A ratio exists only where both runs proved a collapse load.", "",
              "| variant | unstrengthened | anchored | ratio | change | time [s] |",
@@ -148,6 +149,7 @@ if comm.rank == 0:
     if a.anchor_peaks:
         top = max(a.anchor_peaks, key=lambda x: x["force_max"])
         print(f"  largest bar force over the anchored run: {top['name']} "
-              f"{top['force_max'] / 1e3:.2f} kN, {100 * top['force_max'] / top['yield_force']:.0f} %"
+              f"{top['force_max'] / 1e3:.2f} kN, "
+              f"{100 * top['force_max'] / top['yield_force']:.0f} %"
               f" of yield")
     print(f"  {time.perf_counter() - t0:.0f} s; report: {res.report.resolve()}")

@@ -42,8 +42,9 @@ CASE.toml`` on the command line):
 Every output goes to one run folder, written only when the run is complete (the files
 are assembled in a hidden sibling folder and moved in at the end; a run that fails
 leaves nothing): ``report.md`` (the summary with pictures), ``load_displacement.png``,
-``mechanism.png`` (deformed blocks, magnified), ``hinges.png`` (the hinges of FDEM and of
-the limit analysis on the arch), ``curve.csv`` (its first line ``# status: ...``),
+``mechanism.png`` (deformed blocks, magnified), ``first_hinge.png`` and ``peak_load.png``
+(the arch deformed at the first hinge and at the peak load), ``hinges.png`` (the hinges of
+FDEM and of the limit analysis on the arch), ``curve.csv`` (its first line ``# status: ...``),
 ``hinges.csv``, ``summary.json`` and the case file. Units are SI: N, m.
 """
 

@@ -28,8 +28,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-import numpy as np
 from mpi4py import MPI
+
+import numpy as np
 
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tangent
 
