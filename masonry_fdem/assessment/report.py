@@ -59,7 +59,7 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                     m = 0.05 * span / um if um > 0 else 1.0
                     file = name.replace(" ", "_") + ".png"
                     plot_blocks(model, tmp / file, field="displacement", scale=m,
-                                title=f"{case.name}: at the {name}, {load / 1e3:.2f} kN, "
+                                title=f"{case.name}: at the {name}\n{load / 1e3:.2f} kN, "
                                       f"{disp * 1e3:.3f} mm (deformed ×{m:.0f})")
                     drawn.append((name, file, load, disp))
             finally:
