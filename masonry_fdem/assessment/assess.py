@@ -273,10 +273,14 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     return model, [contact, joints], anchors
 
 
-class _JointMonitor:
-    """Openings and mortar states of the radial joints at their two ends (collective)."""
+class _InterfaceOpenings:
+    """Normal openings at the two ends of the arch's interfaces of one kind ("joint":
+    radial joints, "ring": the layers between rings), minus the self-weight state's
+    (collective). ``rows``: per interface ``(interface, (ring, index), (name a, name b),
+    block a, block b)``; ``ends`` ``(n, 2, 2)`` [m]; ``normal`` from block a to b; ``node``
+    the node of each block nearest each end (-1: on another rank)."""
 
-    def __init__(self, case: ArchCase, model, joints=None):
+    def __init__(self, case: ArchCase, model, kind: str):
         from masonry_fdem.solvers.limit_analysis import find_interfaces
 
         layout = case.layout()
@@ -288,14 +292,12 @@ class _JointMonitor:
         for i in range(itf.size):
             na, nb = layout.names[itf.block_a[i]], layout.names[itf.block_b[i]]
             where = classify_interface(na, nb, case.arch)
-            if where is None or where[0] != "joint":
-                continue
-            self.rows.append((i, f"ring {where[1]} joint {where[2]}", (na, nb),
-                              names.index(na), names.index(nb)))
+            if where is not None and where[0] == kind:
+                self.rows.append((i, where[1:], (na, nb), names.index(na), names.index(nb)))
         n = len(self.rows)
         self.ends = np.zeros((n, 2, 2))
         self.normal = np.zeros((n, 2))
-        self.node = -np.ones((n, 2, 2), dtype=np.int64)  # [joint, end, block a/b]
+        self.node = -np.ones((n, 2, 2), dtype=np.int64)  # [interface, end, block a/b]
         cent = np.array([np.mean(p, axis=0) for p in layout.polygons])
         for k, (i, _, _, ba, bb) in enumerate(self.rows):
             p0, p1 = itf.start[i], itf.end[i]
@@ -313,6 +315,26 @@ class _JointMonitor:
                     d = np.linalg.norm(model.X[own] - self.ends[k, e], axis=1)
                     self.node[k, e, side] = own[int(np.argmin(d))]
         self.base = np.zeros((n, 2))
+
+    def openings(self) -> np.ndarray:
+        """``(n, 2)`` normal opening [m] at both ends (positive: open), minus the
+        self-weight state's."""
+        u = self.model.u.x.array.reshape(-1, 2)
+        du = np.zeros((len(self.rows), 2, 2, 2))
+        ok = self.node >= 0
+        du[ok] = u[self.node[ok]]
+        du = self.model.comm.allreduce(du)
+        rel = du[:, :, 1, :] - du[:, :, 0, :]
+        return np.einsum("kej,kj->ke", rel, self.normal) - self.base
+
+
+class _JointMonitor(_InterfaceOpenings):
+    """Openings and mortar states of the radial joints at their two ends (collective)."""
+
+    def __init__(self, case: ArchCase, model, joints=None):
+        super().__init__(case, model, "joint")
+        self.labels = [f"ring {w[0]} joint {w[1]}" for _, w, _, _, _ in self.rows]
+        n = len(self.rows)
         self.side = [self._intrados_end(k) for k in range(n)]
         self.length = np.linalg.norm(self.ends[:, 1] - self.ends[:, 0], axis=1)
         # the mortar's integration point of each joint nearest each end, and its
@@ -337,17 +359,6 @@ class _JointMonitor:
         c = arch_centre(arch.kind, arch.span, arch.rise, self.ends[k].mean(axis=0)[0])
         d = np.linalg.norm(self.ends[k] - c, axis=1)
         return int(np.argmin(d))
-
-    def openings(self) -> np.ndarray:
-        """``(n, 2)`` normal opening [m] at both ends (positive: open), minus the
-        self-weight state's."""
-        u = self.model.u.x.array.reshape(-1, 2)
-        du = np.zeros((len(self.rows), 2, 2, 2))
-        ok = self.node >= 0
-        du[ok] = u[self.node[ok]]
-        du = self.model.comm.allreduce(du)
-        rel = du[:, :, 1, :] - du[:, :, 0, :]
-        return np.einsum("kej,kj->ke", rel, self.normal) - self.base
 
     def classify(self, ratio: float) -> tuple[list[tuple[int, str, str]], np.ndarray]:
         """``(row, kind, side)`` of the joints that are hinges, separated or crushed (see
@@ -384,7 +395,7 @@ class _JointMonitor:
     def event(self, k: int, kind: str, side: str, order: int, load: float,
               disp: float, opening: np.ndarray) -> JointEvent:
         """The event of joint k, its ``opening`` at both ends [m] given."""
-        _, label, blocks, _, _ = self.rows[k]
+        label, blocks = self.labels[k], self.rows[k][2]
         if kind == "hinge":
             pos = self.ends[k, int(np.argmin(opening))]
         elif kind == "crushed":
@@ -397,7 +408,7 @@ class _JointMonitor:
                           float(s), float(load), float(disp))
 
 
-class _RingMonitor:
+class _RingMonitor(_InterfaceOpenings):
     """Radial openings of the interfaces between rings (the sand or collar layers), at
     both ends of each interface, minus the self-weight state's (collective).
 
@@ -410,51 +421,11 @@ class _RingMonitor:
     SEPARATION = 1e-3
 
     def __init__(self, case: ArchCase, model):
-        from masonry_fdem.solvers.limit_analysis import find_interfaces
-
-        layout = case.layout()
-        itf = find_interfaces(layout)
-        names = list(model.blocks.block_names)
-        self.model, self.span = model, case.arch.span
+        super().__init__(case, model, "ring")
+        self.span = case.arch.span
         self.threshold = self.SEPARATION * case.arch.ring_thickness
-        rows = []
-        for i in range(itf.size):
-            na, nb = layout.names[itf.block_a[i]], layout.names[itf.block_b[i]]
-            where = classify_interface(na, nb, case.arch)
-            if where is not None and where[0] == "ring":
-                rows.append((i, where[1], names.index(na), names.index(nb)))
-        n = len(rows)
-        self.layer = np.array([r[1] for r in rows], dtype=np.int64)  # the upper ring
-        self.ends = np.zeros((n, 2, 2))
-        self.normal = np.zeros((n, 2))
-        self.node = -np.ones((n, 2, 2), dtype=np.int64)
-        cent = np.array([np.mean(p, axis=0) for p in layout.polygons])
-        for k, (i, _, ba, bb) in enumerate(rows):
-            p0, p1 = itf.start[i], itf.end[i]
-            self.ends[k] = (p0, p1)
-            t = (p1 - p0) / np.linalg.norm(p1 - p0)
-            nrm = np.array([-t[1], t[0]])
-            if np.dot(nrm, cent[itf.block_b[i]] - cent[itf.block_a[i]]) < 0:
-                nrm = -nrm
-            self.normal[k] = nrm
-            for side, b in enumerate((ba, bb)):
-                own = np.flatnonzero(model.node_block == b)
-                for e in range(2):
-                    if own.size:
-                        d = np.linalg.norm(model.X[own] - self.ends[k, e], axis=1)
-                        self.node[k, e, side] = own[int(np.argmin(d))]
+        self.layer = np.array([w[0] for _, w, _, _, _ in self.rows], dtype=np.int64)
         self.extent = np.abs(self.ends[:, 1, 0] - self.ends[:, 0, 0])  # [m] along x
-        self.base = np.zeros((n, 2))
-
-    def openings(self) -> np.ndarray:
-        """``(n, 2)`` opening [m] at both ends of each ring interface (positive: open)."""
-        u = self.model.u.x.array.reshape(-1, 2)
-        du = np.zeros((len(self.layer), 2, 2, 2))
-        ok = self.node >= 0
-        du[ok] = u[self.node[ok]]
-        du = self.model.comm.allreduce(du)
-        rel = du[:, :, 1, :] - du[:, :, 0, :]
-        return np.einsum("kej,kj->ke", rel, self.normal) - self.base
 
     def layers(self) -> list[dict]:
         """Per layer (``layer``: the ring above it): the largest opening [m] and the
