@@ -20,10 +20,14 @@ N_ENERGY = 6
 
 @njit(cache=True)
 def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, damping, dt,
-                            reaction, energy, du):
+                            reaction, energy, du, local=0.0):
     """One central-difference step with lumped mass and mass-proportional damping: the
     one integrator of every dof set (block nodes, disk centres and rotations, anchor bar
     nodes; for a rotation read torque for force and inertia for mass).
+
+    ``local`` is the coefficient α ∈ [0, 1) of Cundall's local non-viscous damping: the
+    unbalanced force g = f_ext + f_con − f_int of each free dof is reduced by
+    α |g| sign(v(n−½)) (the damping energy counts its work); 0 for none.
 
     On entry ``v`` holds v(n-1/2) and ``u`` holds u(n); on exit v(n+1/2) and u(n+1).
     ``f_int``, ``f_ext``, ``f_con`` are the internal, applied and contact forces at u(n)
@@ -53,7 +57,11 @@ def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, da
             reaction[i] = r
             w_sup += r * 0.5 * (vn + vo) * dt
         else:
-            vn = (a1 * vo + dt * g * minv[i]) * a2
+            fd = 0.0
+            if local > 0.0 and vo != 0.0:
+                fd = local * abs(g) if vo > 0.0 else -local * abs(g)
+            vn = (a1 * vo + dt * (g - fd) * minv[i]) * a2
+            w_damp += fd * 0.5 * (vo + vn) * dt
         vb = 0.5 * (vo + vn) * dt
         du[i] = vb
         w_int += f_int[i] * vb
@@ -143,7 +151,7 @@ def precompile() -> None:
     u, v, f, m = np.zeros(n), np.zeros(n), np.zeros(n), np.ones(n)
     mask = np.zeros(n, dtype=np.int8)
     central_difference_step(u, v, f, f, f, m, m, mask, v, 0.0, 1e-3, f.copy(),
-                            np.zeros(N_ENERGY), np.zeros(n))
+                            np.zeros(N_ENERGY), np.zeros(n), 0.0)
     dr_measure(u, u, v, f, f, f, m, mask, np.zeros(4))
     dr_update(u, v, f, f, m, mask, 0.0, 1.0, True)
     dr_velocity_quotient(v, f, f.copy(), m, mask, True, np.zeros(6)[4:])

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from mpi4py import MPI
@@ -78,6 +78,7 @@ class _Set:
         self.prescriptions = prescriptions
         self.energy = np.zeros(K.N_ENERGY)
         self.du = np.zeros_like(u)
+        self.local = 0.0  # Cundall's local damping coefficient α
 
 
 class ExplicitSolver:
@@ -90,6 +91,13 @@ class ExplicitSolver:
         safety: fraction of the critical step used when ``dt`` is None.
         damping: mass-proportional damping coefficient α [1/s] (f_damp = α M v), on every
             dof set.
+        local_damping: Cundall's local non-viscous damping, for quasi-static runs of
+            granular fill: each free dof's unbalanced force g is reduced by
+            α |g| sign(v), α ∈ [0, 1) (0.7 is usual); one α for every dof set, or α per
+            dof-set name (e.g. ``{"disks": 0.7, "disk_rotations": 0.7}``, others 0).
+            Its work counts as damping energy. It makes the stiffest mode up to 1 + α
+            stiffer (where the velocity opposes the force), so the critical time step is
+            divided by √(1 + α) of the largest α.
         load_factor: factor on the live loads (constant, or a function of time).
         interactions: what acts between blocks, disks and anchors: one
             :class:`~masonry_fdem.interactions.protocol.Interaction` or a sequence of them
@@ -107,17 +115,31 @@ class ExplicitSolver:
         *,
         safety: float = DT_SAFETY,
         damping: float = 0.0,
+        local_damping: float | Mapping[str, float] = 0.0,
         load_factor: float | Callable[[float], float] = 1.0,
         interactions: Interaction | Sequence[Interaction] | None = None,
     ):
         self.model = model
         self.interactions = as_interactions(interactions)
         owned = owned_dofsets(self.interactions)
+        names = {BLOCKS, *owned}
+        alpha = (dict(local_damping) if isinstance(local_damping, Mapping)
+                 else dict.fromkeys(names, local_damping))
+        if set(alpha) - names:
+            raise ValueError(f"local_damping: no dof set {sorted(set(alpha) - names)}; "
+                             f"have {sorted(names)}")
+        for name, a in alpha.items():
+            if not 0.0 <= a < 1.0:
+                raise ValueError(f"local damping must lie in [0, 1), got {a} for {name!r}")
+        alpha = {k: float(a) for k, a in alpha.items()}
         w2 = summed_omega2(self.interactions, owned)
         self.dt_critical = model.stable_time_step(extra_omega2=w2[BLOCKS])
         for name in owned:
             if w2[name] > 0:
                 self.dt_critical = min(self.dt_critical, 2.0 / np.sqrt(w2[name]))
+        # local damping stiffens a mode whose velocity opposes its force (the highest
+        # one, alternating each step) by up to 1 + α: the critical step shrinks by √(1 + α)
+        self.dt_critical /= np.sqrt(1.0 + max(alpha.values(), default=0.0))
         if dt is None:
             if not 0 < safety <= 1:
                 raise ValueError(f"time-step safety factor must be in (0, 1], got {safety}")
@@ -148,6 +170,8 @@ class ExplicitSolver:
             self.sets.append(_Set(ds.name, ds.u, ds.v, np.zeros_like(ds.u), ds.f_ext, ds.f,
                                   ds.mass, ds.presc, ds.vp, ds.reaction, ds.replicated,
                                   ds.prescriptions))
+        for s in self.sets:
+            s.local = alpha.get(s.name, 0.0)
         self.kinetic0 = sum(self._kinetic(s) for s in self.sets)
         u = {s.name: s.u for s in self.sets}
         v = {s.name: s.v for s in self.sets}
@@ -200,7 +224,7 @@ class ExplicitSolver:
         for s in self.sets:
             K.central_difference_step(s.u, s.v, s.f_int, s.f_ext, s.f_con, s.mass, s.minv,
                                       s.presc, s.vp, self.damping, self.dt, s.reaction,
-                                      s.energy, s.du)
+                                      s.energy, s.du, s.local)
         for k, st in enumerate(self._states):
             for s in self.sets:
                 self.work[int(s.replicated), k] += np.dot(st.f[s.name], s.du)
@@ -214,12 +238,19 @@ class ExplicitSolver:
         steps: int | None = None,
         every: int = 100,
         callback: Callable[[ExplicitSolver], None] | None = None,
-    ) -> None:
+        until: Callable[[ExplicitSolver], bool] | None = None,
+    ) -> int:
         """Advance to time ``t_end`` [s] or by ``steps`` steps.
 
         ``callback(solver)`` is called every ``every`` steps and at the end (history,
-        output, progress). A NaN or infinite state stops the run with FloatingPointError;
-        the last good state (checked every ``every`` steps) is restored in the model.
+        output, progress). ``until(solver)``, called after it, stops the run early when it
+        returns True (e.g. ``lambda s: disks.unbalanced_ratio() < 1e-3``; it must return
+        the same on every rank). A NaN or infinite state stops the run with
+        FloatingPointError; the last good state (checked every ``every`` steps) is restored
+        in the model.
+
+        Returns:
+            The number of steps taken.
         """
         if (t_end is None) == (steps is None):
             raise ValueError("give exactly one of t_end or steps")
@@ -246,7 +277,11 @@ class ExplicitSolver:
                 good_t = self.t
                 if callback is not None:
                     callback(self)
+                if until is not None and until(self):
+                    steps = k
+                    break
         log.debug("explicit: %d steps in %.3f s", steps, time.perf_counter() - t0)
+        return steps
 
     def _finite(self) -> bool:
         ok = all(bool(np.isfinite(s.energy[K.E_KINETIC]) and np.isfinite(s.v).all())

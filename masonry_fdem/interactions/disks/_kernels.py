@@ -498,3 +498,109 @@ def max_node_move(u, u_ref, nodes):
         dy = u[2 * i + 1] - u_ref[2 * i + 1]
         m2 = max(m2, dx * dx + dy * dy)
     return math.sqrt(m2)
+
+
+# ---------------------------------------------------------------------- measurements
+@njit(cache=True)
+def pair_forces(x, r, mat, table, pairs, hist, thick, fc):
+    """Contact force on j [N] of every candidate pair (i, j) at the centres x, from the
+    history of the last :func:`disk_disk_forces` call (not updated): the Hertz normal
+    force on the branch that δ_max selects, and the tangential spring force
+    −κ k_n s of that call. Rows of pairs apart are zero.
+
+    Args:
+        x: (n, 2) centres [m]; r: (n,) radii [m]; mat, table, pairs, hist, thick: as
+            :func:`disk_disk_forces`.
+        fc: (k, 2) out, force on disk j of pair k (minus that on disk i) [N].
+    """
+    for k in range(pairs.shape[0]):
+        i = pairs[k, 0]
+        j = pairs[k, 1]
+        dx = x[j, 0] - x[i, 0]
+        dy = x[j, 1] - x[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        fc[k, 0] = 0.0
+        fc[k, 1] = 0.0
+        if r[i] + r[j] - d <= 0.0 or d <= 0.0:
+            continue
+        nx = dx / d
+        ny = dy / d
+        tab = table[mat[i], mat[j]]
+        fn = hertz_force(hertz_k(tab[T_ESTAR], r[i], r[j], thick), tab[T_REST],
+                         r[i] + r[j] - d, hist[k, H_DMAX])
+        ft = -tab[T_KAPPA] * hist[k, H_KN] * hist[k, H_SLIP]
+        fc[k, 0] = fn * nx - ft * ny
+        fc[k, 1] = fn * ny + ft * nx
+
+
+@njit(cache=True)
+def _in_cell(x, y, lo0, lo1, hi0, hi1):
+    return lo0 <= x < hi0 and lo1 <= y < hi1
+
+
+@njit(cache=True)
+def love_sum_pairs(x, r, pairs, fc, lo0, lo1, hi0, hi1, out):
+    """Add Σ f ⊗ (x_c − x_p) over the disk–disk contacts of the disks p whose centre lies
+    in the cell [lo0, hi0) × [lo1, hi1) [m]: f the force on p [N], x_c the contact point
+    (the middle of the overlap, as :func:`disk_disk_forces`).
+
+    Args:
+        x: (n, 2) centres [m]; r: (n,) radii [m]; pairs: (k, 2); fc: (k, 2) forces on j
+            (:func:`pair_forces`).
+        out: (2, 2) in/out [N m], out[a, b] += f_a (x_c − x_p)_b.
+    """
+    for k in range(pairs.shape[0]):
+        fx = fc[k, 0]
+        fy = fc[k, 1]
+        if fx == 0.0 and fy == 0.0:
+            continue
+        i = pairs[k, 0]
+        j = pairs[k, 1]
+        dx = x[j, 0] - x[i, 0]
+        dy = x[j, 1] - x[i, 1]
+        d = math.sqrt(dx * dx + dy * dy)
+        nx = dx / d
+        ny = dy / d
+        half = 0.5 * (r[i] + r[j] - d)
+        if _in_cell(x[i, 0], x[i, 1], lo0, lo1, hi0, hi1):  # −f at a_i n from x_i
+            a = r[i] - half
+            out[0, 0] -= fx * a * nx
+            out[0, 1] -= fx * a * ny
+            out[1, 0] -= fy * a * nx
+            out[1, 1] -= fy * a * ny
+        if _in_cell(x[j, 0], x[j, 1], lo0, lo1, hi0, hi1):  # f at −a_j n from x_j
+            a = r[j] - half
+            out[0, 0] -= fx * a * nx
+            out[0, 1] -= fx * a * ny
+            out[1, 0] -= fy * a * nx
+            out[1, 1] -= fy * a * ny
+
+
+@njit(cache=True)
+def love_sum_points(x, disk, f, xc, lo0, lo1, hi0, hi1, out):
+    """Add Σ f ⊗ (x_c − x_p) over contacts given by point (e.g. disk–block), for the
+    disks p = disk[k] whose centre lies in the cell [lo0, hi0) × [lo1, hi1) [m].
+
+    Args:
+        x: (n, 2) centres [m]; disk: (k,) int64 disk of each contact; f: (k, 2) force on
+            the disk [N]; xc: (k, 2) contact points [m]; out: (2, 2) in/out [N m].
+    """
+    for k in range(disk.size):
+        p = disk[k]
+        if not _in_cell(x[p, 0], x[p, 1], lo0, lo1, hi0, hi1):
+            continue
+        lx = xc[k, 0] - x[p, 0]
+        ly = xc[k, 1] - x[p, 1]
+        out[0, 0] += f[k, 0] * lx
+        out[0, 1] += f[k, 0] * ly
+        out[1, 0] += f[k, 1] * lx
+        out[1, 1] += f[k, 1] * ly
+
+
+@njit(cache=True)
+def count_contacts(pairs, fc, count):
+    """Add to count (n,) int64 the number of pairs of each disk with a non-zero force."""
+    for k in range(pairs.shape[0]):
+        if fc[k, 0] != 0.0 or fc[k, 1] != 0.0:
+            count[pairs[k, 0]] += 1
+            count[pairs[k, 1]] += 1

@@ -224,6 +224,18 @@ class DiskBlockContact(Interaction):
         state.f["disks"] += buf[: 2 * n]
         state.f["disk_rotations"] += buf[2 * n:]
 
+    def disk_contacts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """This rank's disk–block contacts of the last evaluation: (k,) disk ids, (k, 2)
+        force on the disk [N] (normal, damping and friction), (k, 2) contact point x_c [m]
+        (for :meth:`Disks.cell_stress` and :meth:`Disks.contact_counts`)."""
+        touch = self.out[:, DF.O_AREA] > 0.0
+        o = self.out[touch]
+        n = o[:, [DF.O_NX, DF.O_NY]]
+        t = np.c_[-n[:, 1], n[:, 0]]
+        f = (o[:, DF.O_FN] + o[:, DF.O_FD])[:, None] * n + o[:, DF.O_FT][:, None] * t
+        return (np.ascontiguousarray(self.pairs[touch, 0]), f,
+                np.ascontiguousarray(o[:, [DF.O_XC, DF.O_YC]]))
+
     def energies(self) -> dict[str, float]:
         """Elastic energy in the disk–block contacts now and dissipated by friction and
         damping since the start [J] (collective)."""

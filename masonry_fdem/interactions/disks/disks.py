@@ -18,6 +18,10 @@ factor of a few, which a uniform grid serves best), rebuilt when a disk has move
 the margin since the last rebuild; the tangential and rolling histories of persisting
 pairs are carried over.
 
+A fill is brought to rest by ``ExplicitSolver(..., local_damping=0.7)`` (Cundall's local
+damping) until :meth:`Disks.unbalanced_ratio` is small; :meth:`Disks.cell_stress` and
+:meth:`Disks.bulk_density` then measure the averaged stress and density in a cell.
+
 Parallel runs: every rank holds every disk and computes the disk–disk forces of all of
 them identically (the disk state stays replicated, nothing is exchanged); block couplings
 are computed by the rank owning the block and summed over ranks.
@@ -275,6 +279,95 @@ class Disks(Interaction):
                 "normal": float(w[DK.W_EN]), "tangential": float(w[DK.W_ET]),
                 "rolling": float(w[DK.W_ER]), "restitution_loss": float(w[DK.W_HYST]),
                 "friction_loss": float(w[DK.W_FRIC]), "rolling_loss": float(w[DK.W_ROLL])}
+
+    # ------------------------------------------------------------------ measurements
+    def pair_forces(self) -> np.ndarray:
+        """(k, 2) contact force [N] on disk j of each candidate pair (i, j) of ``pairs``
+        (minus that on disk i), at the current centres with the friction history of the
+        last force evaluation; zero for pairs apart."""
+        fc = np.zeros((self.pairs.shape[0], 2))
+        DK.pair_forces(self.x, self.r, self.mat, self.table, self.pairs, self.hist,
+                       self.width, fc)
+        return fc
+
+    def contact_counts(self, couplings: Sequence = ()) -> np.ndarray:
+        """(n,) number of contacts carrying a force of each disk: disk–disk, plus those
+        with blocks of the given :class:`DiskBlockContact` couplings (collective when
+        couplings are given)."""
+        count = np.zeros(self.n, dtype=np.int64)
+        for c in couplings:
+            disk, _, _ = c.disk_contacts()
+            count += np.bincount(disk, minlength=self.n)
+        if couplings and self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, count, op=MPI.SUM)
+        DK.count_contacts(self.pairs, self.pair_forces(), count)
+        return count
+
+    def unbalanced_ratio(self, couplings: Sequence = ()) -> float:
+        """Unbalanced-force ratio of the last force evaluation: mean |m g + f_contact| over
+        mean |m g| [-], over the free disks with at least two contacts (rattlers, with none
+        or one, are left out); ``couplings`` as :meth:`contact_counts` (collective then).
+        Returns inf when no disk has two contacts.
+
+        Raises:
+            ValueError: no gravity is applied (:meth:`add_gravity`).
+        """
+        if not np.any(self.g):
+            raise ValueError("the unbalanced-force ratio needs gravity (add_gravity)")
+        held = (self.contact_counts(couplings) >= 2) & (self.fixed == 0)
+        if not held.any():
+            return math.inf
+        unbal = np.linalg.norm(self.f[held] + self._weight[held], axis=1).mean()
+        return float(unbal / np.linalg.norm(self._weight[held], axis=1).mean())
+
+    def _cell(self, lo, hi) -> tuple[np.ndarray, np.ndarray, float]:
+        lo = np.asarray(lo, dtype=float).ravel()
+        hi = np.asarray(hi, dtype=float).ravel()
+        if lo.size != 2 or hi.size != 2 or not (np.all(np.isfinite(lo))
+                                                 and np.all(np.isfinite(hi))):
+            raise ValueError(f"a cell is given by two finite corners (x, y) [m], got {lo}, {hi}")
+        if not np.all(lo < hi):
+            raise ValueError(f"cell corners must satisfy lo < hi, got lo = {lo}, hi = {hi}")
+        return lo, hi, float(np.prod(hi - lo))
+
+    def cell_stress(self, lo: Sequence[float], hi: Sequence[float],
+                    couplings: Sequence = ()) -> np.ndarray:
+        """Average (Love–Weber) stress [Pa] in the rectangular cell [lo, hi) [m]:
+
+            σ_ab = 1/(A w) Σ_p Σ_c f_a (x_c − x_p)_b,
+
+        over the disks p whose CENTRE lies in the cell (whole disks, not clipped), and over
+        their contacts c: f the force on p [N], x_c the contact point — the middle of the
+        overlap for a disk–disk contact, the kernel's contact point for a disk–block contact
+        of the given :class:`DiskBlockContact` couplings (collective then; without them
+        wall contacts are not counted, so keep the cell away from blocks). A = cell area
+        [m²], w = disk thickness [m]. Tension positive, compression negative (as the
+        blocks' stress). Forces are those of the last evaluation (friction history) at the
+        current centres. σ is symmetric up to the disks' unbalanced torques; the full
+        tensor is returned.
+
+        Returns:
+            (2, 2) σ [Pa], rows and columns (x, y).
+        """
+        lo, hi, area = self._cell(lo, hi)
+        out = np.zeros((2, 2))
+        for c in couplings:
+            disk, f, xc = c.disk_contacts()
+            DK.love_sum_points(self.x, disk, f, xc, lo[0], lo[1], hi[0], hi[1], out)
+        if couplings and self.comm.size > 1:
+            self.comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)
+        DK.love_sum_pairs(self.x, self.r, self.pairs, self.pair_forces(), lo[0], lo[1],
+                          hi[0], hi[1], out)
+        return out / (area * self.width)
+
+    def bulk_density(self, lo: Sequence[float], hi: Sequence[float]) -> float:
+        """Bulk density [kg/m³] in the rectangular cell [lo, hi) [m]: the mass of the disks
+        whose centre lies in the cell over the cell volume A w (the same disks as
+        :meth:`cell_stress`; unbiased for a homogeneous packing, noisy for a cell of few
+        disks)."""
+        lo, hi, area = self._cell(lo, hi)
+        inside = np.all((self.x >= lo) & (self.x < hi), axis=1)
+        return float(self.m[inside].sum() / (area * self.width))
 
     def _state_changed(self) -> None:
         self._fixed_xy[:] = np.repeat(self.fixed, 2)
