@@ -15,11 +15,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from masonry_fdem import Material, Model
 from masonry_fdem.geometry import BlockMesh, crossed_grid
 from masonry_fdem.interactions import BlockContact, ContactSettings
 from masonry_fdem.materials import MohrCoulomb
+from masonry_fdem.materials.elastic import Hypothesis
 from masonry_fdem.solvers import StaticSolver
 from masonry_fdem.solvers.status import Status
 
@@ -88,3 +90,42 @@ def test_rankine_active_and_passive_thrust_on_a_smooth_rigid_wall():
     assert abs(act[-1] / act[-2] - 1.0) < 0.01 and abs(pas[-1] / pas[-2] - 1.0) < 0.01
     # and the elastic start was well away from them
     assert act[0] > 1.1 * pa and pas[0] < 0.6 * pp
+
+
+def test_fill_in_plane_strain_beside_blocks_in_plane_stress():
+    """Per-material hypotheses: two unit squares of the same elastic law, laterally
+    confined and pressed by ε = 1e-6, carry σ_yy = (λ + 2μ) ε with the plane-strain λ for
+    the one named in ``hypotheses`` and the plane-stress λ* = 2λμ/(λ + 2μ) for the other."""
+    from masonry_fdem.solvers.status import Status
+
+    law = Material(density=2000.0, E=50e6, nu=0.3)
+    xs, cs = crossed_grid(np.linspace(0.0, 1.0, 3), np.linspace(0.0, 1.0, 3))
+    x = np.r_[xs, xs + [2.0, 0.0]]
+    cells = np.r_[cs, cs + len(xs)]
+    blocks = BlockMesh.from_arrays(x, cells, np.r_[np.zeros(len(cs), dtype=np.int64),
+                                                   np.ones(len(cs), dtype=np.int64)],
+                                   block_names=["fill", "pier"], material_names=["soil", "stone"],
+                                   block_material=[0, 1])
+    model = Model(blocks, {"soil": law, "stone": law}, hypotheses={"soil": "plane_strain"})
+    model.fix(lambda X: np.isclose(X[1], 0.0), components=(1,), name="base")
+    model.fix(lambda X: np.isclose(X[0] % 2.0, 0.0) | np.isclose(X[0] % 2.0, 1.0),
+              components=(0,), name="sides")
+    eps = 1e-6
+    for name, lo in (("fill top", 0.0), ("pier top", 2.0)):
+        model.prescribe_nodes(lambda X, lo=lo: np.isclose(X[1], 1.0) & (X[0] >= lo - 1e-9)
+                              & (X[0] <= lo + 1.0 + 1e-9), (None, 0.0), name=name)
+    solver = StaticSolver(model)
+    st, _ = solver.advance(displacement={"fill top": (None, -eps), "pier top": (None, -eps)})
+    assert st.status is Status.LOAD_REACHED
+    r = solver.reactions()
+    mu = law.E / (2 * (1 + law.nu))
+    lam = law.E * law.nu / ((1 + law.nu) * (1 - 2 * law.nu))
+    lam_star = 2 * lam * mu / (lam + 2 * mu)
+    strain_side, stress_side = -r["fill top"][1] / eps, -r["pier top"][1] / eps
+    print(f"\nconfined moduli: plane strain {strain_side:.6e} Pa (λ+2μ = {lam + 2 * mu:.6e}), "
+          f"plane stress {stress_side:.6e} Pa (λ*+2μ = {lam_star + 2 * mu:.6e})")
+    assert abs(strain_side / (lam + 2 * mu) - 1.0) < 1e-4
+    assert abs(stress_side / (lam_star + 2 * mu) - 1.0) < 1e-4
+    assert model.hypotheses == {"soil": Hypothesis.PLANE_STRAIN, "stone": Hypothesis.PLANE_STRESS}
+    with pytest.raises(ValueError, match="no material"):
+        Model(blocks, {"soil": law, "stone": law}, hypotheses={"sand": "plane_strain"})

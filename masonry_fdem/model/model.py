@@ -88,6 +88,9 @@ class Model:
         blocks: the block mesh (from ``masonry_fdem.geometry``), the same on every rank.
         materials: material of each material name used in ``blocks``.
         hypothesis: plane stress (with out-of-plane ``width``) or plane strain.
+        hypotheses: per material name, a hypothesis other than ``hypothesis`` (e.g. the
+            fill of a bridge in plane strain under a plane-stress arch barrel: a soil in
+            plane stress squeezes out of the plane and has almost no bearing capacity).
         width: out-of-plane width [m] (arch barrel width, wall thickness); under plane
             strain it is the length of the slice the forces refer to.
         comm: MPI communicator; each block goes wholly to one rank.
@@ -102,10 +105,18 @@ class Model:
         materials: Mapping[str, Material],
         *,
         hypothesis: Hypothesis | str = Hypothesis.PLANE_STRESS,
+        hypotheses: Mapping[str, Hypothesis | str] | None = None,
         width: float = 1.0,
         comm: MPI.Comm = MPI.COMM_WORLD,
     ):
         self.hypothesis = Hypothesis(hypothesis)
+        unknown = sorted(set(hypotheses or {}) - set(blocks.material_names))
+        if unknown:
+            raise ValueError(f"hypotheses: no material {unknown} in the block mesh (it has "
+                             f"{list(blocks.material_names)})")
+        #: the hypothesis of each material name
+        self.hypotheses = {n: Hypothesis((hypotheses or {}).get(n, self.hypothesis))
+                           for n in blocks.material_names}
         if not (np.isfinite(width) and width > 0):
             raise ValueError(f"out-of-plane width must be > 0 m, got {width}")
         self.width = float(width)
@@ -181,15 +192,16 @@ class Model:
         for mid, name in enumerate(self.blocks.material_names):
             mat = self.materials[name]
             in_mat = self.blocks.cell_material == mid
+            hyp = self.hypotheses[name]
             if np.any(in_mat):
-                mat.check_mesh(float(h_cells[in_mat].max()), self.hypothesis)
-            lam, mu = lame_parameters(mat, self.hypothesis)
+                mat.check_mesh(float(h_cells[in_mat].max()), hyp)
+            lam, mu = lame_parameters(mat, hyp)
             self.lam[mid] = dolfinx.fem.Constant(mesh, lam)
             self.mu[mid] = dolfinx.fem.Constant(mesh, mu)
             self.rho[mid] = dolfinx.fem.Constant(mesh, mat.density)
-            k = LawContext(mesh, u, H, F, E, self.lam[mid], self.mu[mid], self.hypothesis, h)
+            k = LawContext(mesh, u, H, F, E, self.lam[mid], self.mu[mid], hyp, h)
             if isinstance(mat, ReturnMapping):
-                self.qstate.add_return_mapping(mid, mat, k, self.hypothesis)
+                self.qstate.add_return_mapping(mid, mat, k, hyp)
             self.qstate.add_history(mid, mat, k)
             self.law_context[mid] = k
             P = mat.first_piola(k)
