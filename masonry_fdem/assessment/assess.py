@@ -63,7 +63,7 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
-from masonry_fdem.assessment.specs import classify_interface
+from masonry_fdem.assessment.specs import SPREADER, classify_interface
 from masonry_fdem.geometry.arches import arch_centre, arch_parameter
 from masonry_fdem.assessment.report import write_run_folder
 from masonry_fdem.io.rundir import run_folder_problem
@@ -237,6 +237,31 @@ def status_from_dict(d: Mapping[str, Any]) -> RunStatus:
 
 # ---------------------------------------------------------------------------- the model
 
+def _settle(solver, joints, case: ArchCase) -> RunStatus:
+    """Self-weight by Newton (:meth:`StaticSolver.settle`). With fill, its friction-only
+    interfaces are held stuck (tan δ = 10) while the fill takes its weight, then released
+    to their own friction in steps of half, each an equilibrium: from zero stress the
+    stick/slip split of a friction-only interface does not shrink with the load step, and
+    Newton can cycle at the first one (seen on the TRL arch with fill)."""
+    if case.fill is None or joints is None:
+        return solver.settle()
+    jf = case.fill.interface()
+    mu = jf.tan_phi
+    f = max(10.0, 4.0 * mu)
+    joints.set_friction(jf, f)
+    st = solver.settle()
+    while st.status is Status.LOAD_REACHED and f > mu:
+        f = max(mu, 0.5 * f)
+        joints.set_friction(jf, f)
+        r = solver.solve(solver.load_factor)
+        if not r.converged:
+            st = RunStatus(Status.NOT_CONVERGED, st.load, st.peak, f,
+                           f"the fill's interfaces released to tan δ = {f:.3g}: Newton did "
+                           f"not converge ({r.reason})")
+    joints.set_friction(jf, mu)  # (a failure falls back on dynamic relaxation)
+    return st
+
+
 def _with(interactions: list, anchors) -> list:
     """The solver's interactions: contact and joints, then the anchors if any."""
     return interactions if anchors is None else [*interactions, anchors]
@@ -254,13 +279,30 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
 
     layout = case.mesh_layout()
-    mesh = layout.mesh(case.arch.mesh_size, comm)
-    model = Model(mesh, case.materials(), width=case.arch.width, comm=comm)
+    sizes = [case.arch.mesh_size] * len(layout)
+    hyp = {}
+    friction_table = {}
+    fill = case.fill
+    if fill is not None:
+        # the fill, its end walls (coarse: fixed), the loading beam (two elements thick)
+        size = {"fill": fill.mesh_size, "spreader": 0.5 * SPREADER[1]}
+        sizes = [size.get(n, fill.wall_thickness if n.startswith("wall:") else
+                          case.arch.mesh_size) for n in layout.names]
+        hyp = {fill.material: "plane_strain"}
+        friction_table = {pair: fill.interface_friction for pair, jm in
+                          case.joint_materials().items() if fill.material in pair}
+    mesh = layout.mesh(sizes, comm)
+    model = Model(mesh, case.materials(), hypotheses=hyp, width=case.arch.width, comm=comm)
     model.fix_blocks("abutment:*", name="abutments")
+    if fill is not None:
+        model.fix_blocks("wall:*", name="walls")
+        # the loading beam is guided: it moves down without sliding or tilting
+        model.prescribe_velocity(SPREADER[0], (0.0, None), name="beam guide")
     if case.loading.self_weight:
         model.add_gravity()
     contact = BlockContact(model, ContactSettings(
-        friction=case.analysis.friction, penalty_factor=case.analysis.penalty_factor))
+        friction=case.analysis.friction, friction_table=friction_table,
+        penalty_factor=case.analysis.penalty_factor))
 
     def bond(jm):
         return jm if jm is not None and (jm.bonded or jm.kn is not None) else None
@@ -512,7 +554,7 @@ def assess(
 
         solver = StaticSolver(model, interactions=_with(inter, anchors), rtol=an.newton_rtol,
                               max_it=an.newton_iterations)
-        st0 = solver.settle()
+        st0 = _settle(solver, next((i for i in inter if i.name == "joints"), None), case)
         ok, why = st0.status is Status.LOAD_REACHED, st0.detail
         if not ok:
             # Newton from the unloaded state, where the blocks only touch, can overshoot
@@ -568,7 +610,7 @@ def assess(
     anchor_peaks: dict[str, dict] = {}  # per anchor: its largest bar force over the run
 
     # load-line displacement: mean vertical displacement of the nodes nearest the points
-    load_nodes = [model.nearest_node(p, "voussoir:*") for p in points]
+    load_nodes = [model.nearest_node(p, case.load_blocks()) for p in points]
     u_sw = _mean_uy(model, load_nodes)
 
     def record(load: float, iterations: int) -> None:
@@ -601,6 +643,12 @@ def assess(
             snapshots["first hinge"] = (model.u.x.array.copy(), float(load), float(disp))
         if "peak load" not in snapshots or load > snapshots["peak load"][1]:
             snapshots["peak load"] = (model.u.x.array.copy(), float(load), float(disp))
+            if case.fill is not None and write:
+                # the load's path through the fill: σ_yy per cell at the peak
+                model.update_stress()
+                n = model.dmesh.cell_input.size
+                state["stress"] = (model.stress.x.array.reshape(-1, 4)[:n, 3].copy(),
+                                   model.u.x.array.copy(), float(load), float(disp))
         if bar is not None:
             bar.update(load / scale, f"{load / 1e3:8.2f} kN  {disp * 1e3:7.3f} mm  "
                        f"{len({k for k, _ in seen})} joints open")
@@ -637,7 +685,7 @@ def assess(
         # displacement (equal forces on the spreader's ends, as a spreader beam jacked
         # at its middle gives; dynamic relaxation's "displacement" is a rigid platen)
         for p in points:
-            model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
+            model.add_point_load(p, (0.0, -1.0 / len(points)), blocks=case.load_blocks())
         run = solver.follow(d_inc, **common)
         st = run.status
         status = replace(st, detail=f"Newton, arc length on the load-line displacement: "
@@ -653,7 +701,7 @@ def assess(
         drive_from = None  # load-line displacement [m] where displacement control starts
         if ld.control is LoadControl.LOAD:
             for p in points:
-                model.add_point_load(p, (0.0, -1.0 / len(points)), blocks="voussoir:*")
+                model.add_point_load(p, (0.0, -1.0 / len(points)), blocks=case.load_blocks())
 
             def on_step(r) -> None:
                 if r.converged:
@@ -765,7 +813,7 @@ def assess(
         log.info("%s: %s (%s)", case.name, result.status_line, status.detail)
     if write:
         write_run_folder(case, result, folder, model, inter, anchors, comm,
-                         snapshots=snapshots)
+                         snapshots=snapshots, stress=state.get("stress"))
     return result
 
 

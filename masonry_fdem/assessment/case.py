@@ -29,7 +29,18 @@ Schema (``*``: required):
     ``abutment_material`` ("abutment"): names of ``[materials]`` tables.
 ``[materials.<name>]``
     ``density``\\* [kg/m³], ``E``\\* [Pa], ``nu``\\* — one table per block material; those
-    named in ``[arch]`` must exist.
+    named in ``[arch]`` must exist. With ``phi``\\* [deg], ``c`` [Pa] (0) and ``psi``
+    [deg] (0, at most phi) the material is Mohr–Coulomb (a fill).
+``[fill]``
+    A continuum backfill over the arch (:class:`~masonry_fdem.assessment.specs.FillSpec`):
+    ``cover``\\* fill depth over the crown's extrados [m]; ``material`` ("fill"), a
+    Mohr–Coulomb ``[materials]`` table, always in plane strain; ``interface_friction``
+    tan δ with the extrados, abutments, end walls and loading beam (tan(2φ/3));
+    ``interface_stiffness`` [Pa/m] (20 E/mesh_size); ``mesh_size`` [m] (twice the
+    arch's); ``wall_thickness`` of the two fixed end walls [m] (0.3). The fill spans the
+    abutments' width; the load bears on it through a steel loading beam as wide as
+    ``loading.spreader_width`` (> 0), guided vertically; the load-line displacement is the
+    beam's. The limit analysis stays that of the bare ring.
 ``[joints.mortar]``\\*
     The :class:`~masonry_fdem.interactions.joints.joints.JointMaterial` of the joints between voussoirs
     and at the springings: ``kn``, ``ks`` [Pa/m] (default from the blocks' E), ``ft`` [Pa],

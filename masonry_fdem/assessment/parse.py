@@ -17,12 +17,13 @@ import numpy as np
 
 from masonry_fdem.assessment.specs import S_TOL, TONNE_FORCE, AnalysisSpec, AnchorLayout, AnchorSpec
 from masonry_fdem.assessment.specs import ArchCase, ArchSpec, CaseError, Damage, DamageKind
-from masonry_fdem.assessment.specs import LoadControl, LoadingSpec, Objective, SearchSpec
+from masonry_fdem.assessment.specs import FillSpec, LoadControl, LoadingSpec, Objective, SearchSpec
 from masonry_fdem.assessment.tables import REQUIRED, Table, show
 from masonry_fdem.geometry.arches import ArchKind, arch_layout
 from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
 from masonry_fdem.interactions.joints import JointMaterial
 from masonry_fdem.materials.elastic import Material
+from masonry_fdem.materials.plasticity import MohrCoulomb
 
 __all__ = ["load_case"]
 
@@ -30,6 +31,9 @@ _ARCH_KEYS = ("kind", "span", "rise", "rings", "ring_thickness", "voussoirs", "s
               "segments", "abutment_height", "abutment_width", "width", "mesh_size",
               "voussoir_material", "abutment_material")
 _JOINT_KEYS = tuple(f.name for f in fields(JointMaterial))
+_COULOMB_KEYS = ("c", "phi", "psi")
+_FILL_KEYS = ("cover", "material", "interface_friction", "interface_stiffness", "mesh_size",
+              "wall_thickness")
 _SAND_FORBIDDEN = ("ft", "GfI", "c", "GfII")
 _LOADING_KEYS = ("position", "x", "spreader_width", "increment", "max_load", "self_weight",
                  "control", "displacement_increment", "max_displacement")
@@ -106,15 +110,61 @@ def _parse_materials(root: Table) -> dict[str, Material]:
         root.bad("materials", "must be a table of [materials.<name>] tables")
         return out
     for name in data:
-        t = Table(root.problems, f"materials.{name}", data[name], ("density", "E", "nu"))
+        t = Table(root.problems, f"materials.{name}", data[name],
+                  ("density", "E", "nu", *_COULOMB_KEYS))
         rho, E = t.number("density", gt=0.0), t.number("E", gt=0.0)
         nu = t.number("nu", gt=-1.0, lt=0.5)
+        coulomb = any(k in t.data for k in _COULOMB_KEYS)
+        if coulomb:
+            # a Mohr–Coulomb soil (the fill): c [Pa], phi, psi [degrees]
+            c = t.number("c", 0.0, ge=0.0)
+            phi = t.number("phi", ge=0.0, lt=90.0)
+            psi = t.number("psi", 0.0, ge=0.0, lt=90.0)
+            if None in (c, phi, psi):
+                continue
+            if psi > phi:
+                t.bad("psi", f"the dilatancy angle {psi:g} exceeds the friction angle {phi:g}")
+                continue
         if None not in (rho, E, nu):
             try:
-                out[name] = Material(rho, E, nu)
+                out[name] = (MohrCoulomb(density=rho, E=E, nu=nu, c=c, phi=phi, psi=psi)
+                             if coulomb else Material(rho, E, nu))
             except ValueError as e:
                 root.problems.append(f"materials.{name}: {e}")
     return out
+
+
+def _parse_fill(t: Table, mats: Mapping[str, Material], arch: ArchSpec | None,
+                data: Mapping[str, Any]) -> FillSpec | None:
+    cover = t.number("cover", gt=0.0)
+    mat = t.string("material", "fill")
+    if mat is not None and mat not in data.get("materials", {}):
+        t.bad("material", f"no [materials.{mat}] in the case")
+        mat = None
+    elif mat is not None and arch is not None and mat in (arch.voussoir_material,
+                                                          arch.abutment_material):
+        t.bad("material", f"{mat!r} is the arch's own material; give the fill its own")
+        mat = None
+    elif mat is not None and mat in mats and not isinstance(mats[mat], MohrCoulomb):
+        t.bad("material", f"[materials.{mat}] is elastic: a fill needs c, phi (and psi) "
+              "for its Mohr–Coulomb strength")
+        mat = None
+    fm = mats.get(mat) if mat is not None else None
+    # default interface friction: tan(2/3 phi) of the fill (a rough wall; Potyondy 1961)
+    mu0 = math.tan(math.radians(2.0 / 3.0 * fm.phi)) if isinstance(fm, MohrCoulomb) else 0.5
+    mu = t.number("interface_friction", mu0, ge=0.0)
+    # default interface stiffness: 20 E_fill / mesh size (stiff beside the fill's own
+    # compliance, like the default penalty of the contact)
+    size = t.number("mesh_size", None, gt=0.0)
+    if size is None and arch is not None:
+        size = 2.0 * arch.mesh_size
+    kn0 = 20.0 * fm.E / size if fm is not None and size else None
+    kn = t.number("interface_stiffness", kn0, gt=0.0)
+    wall = t.number("wall_thickness", 0.3, gt=0.0)
+    if None in (cover, mat, mu, kn, size, wall):
+        return None
+    spec = FillSpec(cover, mat, mu, kn, size, wall)
+    return spec
 
 
 def _joint_values(t: Table, skip: Sequence[str] = ()) -> dict[str, float] | None:
@@ -460,7 +510,7 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         name = name or path.stem
     problems: list[str] = []
     root = Table(problems, "", data, ("arch", "materials", "joints", "loading", "damage",
-                                       "analysis", "anchors", "search"))
+                                       "analysis", "anchors", "search", "fill"))
     at = root.table("arch", _ARCH_KEYS, required=True)
     arch = _parse_arch(at) if at is not None else None
     mats = _parse_materials(root)
@@ -488,6 +538,12 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
     anchors = [_parse_anchor(i, a, problems, arch) for i, a in enumerate(root.tables("anchors"))]
     st = root.table("search", _SEARCH_KEYS)
     search = _parse_search(st, problems) if st is not None else None
+    ft = root.table("fill", _FILL_KEYS)
+    fill = _parse_fill(ft, mats, arch, data) if ft is not None else None
+    if ft is not None and fill is not None and loading is not None and not (
+            loading.spreader_width > 0):
+        ft.problems.append("loading: a load on the fill needs a loading beam "
+                           "(spreader_width > 0): a point load would punch into the soil")
     an = root.table("analysis", _ANALYSIS_KEYS) or Table(problems, "analysis", {}, ())
     analysis = AnalysisSpec(
         an.boolean("limit_analysis", True),
@@ -512,7 +568,12 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
     if problems:
         raise CaseError(problems, label)
     case = ArchCase(name, arch, MappingProxyType(dict(mats)), mortar, ring, ring_type, loading,
-                    tuple(damage), analysis, tuple(anchors), path, search)
+                    tuple(damage), analysis, tuple(anchors), path, search, fill)
+    if fill is not None:
+        try:
+            case.fill_layout()
+        except ValueError as e:
+            raise CaseError([f"fill: {e}"], label) from None
     problems = [f"anchors: {p}" for p in case.anchor_problems()]
     if problems:
         raise CaseError(problems, label)

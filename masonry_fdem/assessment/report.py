@@ -19,13 +19,16 @@ __all__ = ["read_curve", "status_text", "write_run_folder"]
 
 
 def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
-                     snapshots: dict | None = None) -> None:
+                     snapshots: dict | None = None, stress: tuple | None = None) -> None:
     """Write the run folder of an assessment (collective): the mechanism picture, the
     curve, the hinge sequence and the report, into a hidden folder handed over when
     complete; ``res.folder`` and ``res.report`` are set. ``snapshots`` (``{name: (local
     displacement array, load [N], load-line displacement [m])}``, e.g. "first hinge" and
     "peak load") are drawn deformed as ``<name>.png`` (blocks only: the joint and anchor
-    states are those of the end of the run, so they are not drawn there)."""
+    states are those of the end of the run, so they are not drawn there). ``stress``
+    (``(local σ_yy per cell [Pa], local displacements, load [N], load-line displacement
+    [m])``, taken at the peak load of a case with fill) is drawn as
+    ``vertical_stress.png``: the load's path through the fill into the arch."""
     from masonry_fdem.io import plot_blocks
 
     tmp = partial_folder(folder)
@@ -62,6 +65,31 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                                 title=f"{case.name}: at the {name}\n{load / 1e3:.2f} kN, "
                                       f"{disp * 1e3:.3f} mm (deformed ×{m:.0f})")
                     drawn.append((name, file, load, disp))
+            finally:
+                model.u.x.array[:] = now
+        if stress is not None:
+            syy, us, load, disp = stress
+            parts = comm.gather((model.dmesh.cell_input, syy), root=0)
+            cells = np.zeros(model.blocks.n_cells)
+            if comm.rank == 0:
+                for idx, vals in parts:
+                    cells[idx] = vals
+            now = model.u.x.array.copy()
+            try:
+                model.u.x.array[:] = us
+                # the colour scale spans the 1st to 99th percentile of the fill's and the
+                # arch's cells: the peaks at the beam's edges would wash out the rest
+                lo = hi = 0.0
+                if comm.rank == 0:
+                    lo, hi = np.percentile(cells / 1e3, [1.0, 99.0])
+                lo, hi = comm.bcast((float(lo), float(hi)), root=0)
+                plot_blocks(model, tmp / "vertical_stress.png", field=cells / 1e3, scale=1.0,
+                            cmap="viridis_r", clim=(lo, min(hi, 0.0) if lo < 0 else hi),
+                            title=f"{case.name}: vertical stress σ_yy [kPa] at the peak load"
+                                  f"\n{load / 1e3:.2f} kN, {disp * 1e3:.3f} mm; compression < 0, "
+                                  "colours clipped at 1 % and 99 %")
+                drawn.append(("vertical stress at the peak load", "vertical_stress.png", load,
+                              disp))
             finally:
                 model.u.x.array[:] = now
         hand_over(lambda t: _write_rank0(case, res, t, mag, drawn), tmp, folder, comm)

@@ -23,13 +23,16 @@ from masonry_fdem.materials.elastic import Material
 
 __all__ = ["TONNE_FORCE", "AnalysisSpec", "AnchorLayout", "AnchorSpec", "ArchCase", "ArchSpec",
            "CaseError", "Damage", "DamageKind", "LoadControl", "LoadingSpec", "Objective",
-           "SearchSpec", "S_TOL", "classify_interface", "top_of"]
+           "SearchSpec", "S_TOL", "FillSpec", "SPREADER", "classify_interface", "top_of"]
 
 #: One tonne-force [N].
 TONNE_FORCE = 1000.0 * G
 
 REQUIRED = object()
 S_TOL = 1e-9
+
+#: The loading beam on the road of a case with fill: a steel plate [m thick], its material.
+SPREADER = ("spreader", 0.05, Material(density=7850.0, E=210e9, nu=0.3))
 
 
 class CaseError(ValueError):
@@ -99,6 +102,29 @@ class ArchSpec:
     def blocks_in_ring(self, ring: int) -> int:
         """Number of voussoirs of ``ring`` (one more than ``voussoirs`` if staggered)."""
         return len(self.joint_positions(ring)) - 1
+
+
+@dataclass(frozen=True)
+class FillSpec:
+    """``[fill]``: a continuum (Mohr–Coulomb) backfill over the arch, up to a road
+    ``cover`` [m] above the crown's extrados, retained at its ends by two fixed walls on
+    the abutments' outer faces (:func:`~masonry_fdem.geometry.fill.fill_layout`); always
+    in plane strain. It touches the extrados, the abutments, the walls and the loading
+    beam through a friction-only interface (``interface_friction`` = tan δ, normal
+    stiffness ``interface_stiffness`` [Pa/m], shear stiffness kn/2.6) that opens freely.
+    ``mesh_size`` [m] of its triangles; ``wall_thickness`` [m]."""
+
+    cover: float
+    material: str
+    interface_friction: float
+    interface_stiffness: float
+    mesh_size: float
+    wall_thickness: float = 0.3
+
+    def interface(self) -> JointMaterial:
+        """The fill's interface as a friction-only joint material."""
+        k = self.interface_stiffness
+        return JointMaterial(kn=k, ks=k / 2.6, tan_phi=self.interface_friction)
 
 
 @dataclass(frozen=True)
@@ -305,6 +331,7 @@ class ArchCase:
     anchor_specs: tuple[AnchorSpec, ...]
     source: Path | None = None
     search: SearchSpec | None = None
+    fill: FillSpec | None = None
 
     def layout(self) -> BlockLayout:
         """The arch and its abutments, without the voussoirs of "missing_brick" damage."""
@@ -337,11 +364,46 @@ class ArchCase:
                 if np.min(np.linalg.norm(poly - pt, axis=1)) > tol:
                     polys[i] = np.insert(poly, k + 1, pt, axis=0)
                 break
-        return BlockLayout(tuple(polys), layout.materials, layout.names)
+        out = BlockLayout(tuple(polys), layout.materials, layout.names)
+        if self.fill is None:
+            return out
+        return out + self.fill_layout(out)
+
+    def fill_layout(self, structure: BlockLayout | None = None) -> BlockLayout:
+        """The fill, its two end walls and the loading beam on the road (``spreader``,
+        a steel plate as wide as ``loading.spreader_width``) of a case with ``[fill]``."""
+        from masonry_fdem.geometry.fill import fill_layout
+
+        if self.fill is None:
+            raise ValueError("the case has no [fill]")
+        structure = self.layout() if structure is None else structure
+        x, half = self.load_x(), 0.5 * self.loading.spreader_width
+        f = self.fill
+        fl = fill_layout(structure, cover=f.cover, wall_thickness=f.wall_thickness,
+                         road_points=(x - half, x + half), material=f.material,
+                         wall_material=self.arch.abutment_material)
+        road = self.road_level()
+        name, t, _ = SPREADER
+        beam = np.array([[x - half, road], [x + half, road], [x + half, road + t],
+                         [x, road + t], [x - half, road + t]])
+        return fl + BlockLayout((beam,), (name,), (name,))
+
+    def road_level(self) -> float:
+        """y [m] of the road over the fill (``[fill]`` cases)."""
+        from masonry_fdem.geometry.fill import upper_envelope
+
+        vs = np.vstack([p for p, n in zip(self.layout().polygons, self.layout().names,
+                                          strict=True) if n.startswith("voussoir:")])
+        crown = float(np.max(upper_envelope(self.layout(), vs[:, 0], "voussoir:")))
+        return crown + self.fill.cover
 
     def materials(self) -> dict[str, Material]:
-        """Block material name -> :class:`~masonry_fdem.materials.Material`."""
-        return dict(self.material_table)
+        """Block material name -> :class:`~masonry_fdem.materials.Material` (with fill:
+        the loading beam's steel as ``spreader``)."""
+        out = dict(self.material_table)
+        if self.fill is not None:
+            out[SPREADER[0]] = SPREADER[2]
+        return out
 
     def anchors(self) -> list[Anchor]:
         """The ``[[anchors]]`` as :class:`~masonry_fdem.interactions.anchors.Anchor` objects."""
@@ -403,8 +465,21 @@ class ArchCase:
         return x, top_of(self.layout(), x)
 
     def load_points(self) -> np.ndarray:
-        """``(k, 2)`` points [m] where the spreader bears on the extrados: its two ends
-        (the load point if there is no spreader); each takes an equal share."""
+        """``(k, 2)`` points [m] where the load is applied, each taking an equal share:
+        without fill, where the spreader bears on the extrados (its two ends; the load
+        point if there is no spreader); with fill, the middle of the loading beam's top
+        (the beam bears on the road)."""
+        if self.fill is not None:
+            return np.array([[self.load_x(), self.road_level() + SPREADER[1]]])
+        return self.extrados_load_points()
+
+    def load_blocks(self) -> str:
+        """The blocks the load points bear on (``voussoir:*``, or the loading beam)."""
+        return "voussoir:*" if self.fill is None else SPREADER[0]
+
+    def extrados_load_points(self) -> np.ndarray:
+        """``(k, 2)`` points [m] where the spreader would bear on the bare extrados: its
+        two ends (the load point if there is no spreader)."""
         half = 0.5 * self.loading.spreader_width
         if half == 0.0:
             return np.array([self.load_point()])
@@ -415,7 +490,11 @@ class ArchCase:
         """Joint material per pair of block materials (the mortar) for
         :class:`~masonry_fdem.interactions.joints.joints.Joints`; see :meth:`joint_rules` for the rest."""
         v, a = self.arch.voussoir_material, self.arch.abutment_material
-        return {(v, v): self.mortar, (v, a): self.mortar}
+        out = {(v, v): self.mortar, (v, a): self.mortar}
+        if self.fill is not None:
+            f, jf = self.fill.material, self.fill.interface()
+            out.update({(v, f): jf, (a, f): jf, (f, SPREADER[0]): jf, (a, a): None})
+        return out
 
     def joint_rules(
         self, layout: BlockLayout | None = None
@@ -480,7 +559,7 @@ class ArchCase:
         override the arguments (e.g. ``friction``)."""
         from masonry_fdem.solvers.limit_analysis import limit_analysis
 
-        pts = self.load_points()
+        pts = self.extrados_load_points()
         args = dict(
             density={n: m.density for n, m in self.material_table.items()},
             width=self.arch.width, supports="abutment:*",
@@ -515,7 +594,7 @@ def classify_interface(na: str, nb: str, arch: ArchSpec) -> tuple[str, int, int]
     pa, pb = na.split(":"), nb.split(":")
     if pa[0] == "abutment":
         pa, pb = pb, pa
-    if pa[0] != "voussoir":
+    if pa[0] != "voussoir" or pb[0] not in ("voussoir", "abutment"):
         return None
     ka, ja = int(pa[1]), int(pa[2])
     if pb[0] == "abutment":

@@ -26,6 +26,7 @@ def plot_blocks(
     joints=None,
     disks=None,
     anchors=None,
+    clim: tuple[float, float] | None = None,
 ) -> Path | None:
     """Draw the blocks in their deformed position, coloured by a field (collective).
 
@@ -33,6 +34,7 @@ def plot_blocks(
         model: the model.
         path: PNG file to write (rank 0).
         field: "displacement" (magnitude, nodal), "von_mises" (Cauchy stress, per cell),
+            "sigma_xx", "sigma_yy", "sigma_xy" (a Cauchy stress component, per cell),
             "block" (block id), or an array over the BlockMesh nodes or cells.
         scale: displacement magnification for drawing.
         title: picture title.
@@ -46,6 +48,7 @@ def plot_blocks(
         anchors: the :class:`~masonry_fdem.interactions.anchors.Anchors`, drawn as thick lines
             coloured by their axial force per bar [N] (second colour bar); ruptured bar
             elements are drawn dashed in grey.
+        clim: (low, high) of the colour scale (default: the field's range).
 
     Returns:
         The path on rank 0, None on other ranks.
@@ -68,6 +71,17 @@ def plot_blocks(
                 for idx, vals in parts:
                     cell_values[idx] = vals
             label = "von Mises stress [Pa]"
+        elif field in ("sigma_xx", "sigma_yy", "sigma_xy"):
+            model.update_stress()
+            sig = model.stress.x.array.reshape(-1, 4)
+            col = {"sigma_xx": 0, "sigma_xy": 1, "sigma_yy": 3}[field]
+            local = sig[: model.dmesh.cell_input.size, col].copy()
+            parts = model.comm.gather((model.dmesh.cell_input, local), root=0)
+            if model.comm.rank == 0:
+                cell_values = np.zeros(blocks.n_cells)
+                for idx, vals in parts:
+                    cell_values[idx] = vals
+            label = f"σ_{field[-2:]} [Pa] (Cauchy; compression < 0)"
         elif field == "block":
             cell_values, label = blocks.cell_block.astype(float), "block"
         else:
@@ -100,11 +114,12 @@ def plot_blocks(
     xy = blocks.x + scale * u
     tri = Triangulation(xy[:, 0], xy[:, 1], blocks.cells)
     fig, ax = plt.subplots(figsize=(8, 6), dpi=120)
+    lim = {} if clim is None else {"vmin": clim[0], "vmax": clim[1]}
     if cell_values is not None:
         pc = ax.tripcolor(tri, facecolors=cell_values, cmap=cmap,
-                          edgecolors="k" if show_edges else "none", linewidth=0.1)
+                          edgecolors="k" if show_edges else "none", linewidth=0.1, **lim)
     else:
-        pc = ax.tripcolor(tri, node_values, cmap=cmap, shading="gouraud")
+        pc = ax.tripcolor(tri, node_values, cmap=cmap, shading="gouraud", **lim)
         if show_edges:
             ax.triplot(tri, "k-", lw=0.1)
     seg = xy[blocks.boundary_facets]

@@ -100,6 +100,16 @@ def finite_plastic_update(grad, state0, state1, stress, energy, qps, prm, dt):
         t01 = f00 * dxy + f01 * dyy
         t10 = f10 * dxx + f11 * dxy
         t11 = f10 * dxy + f11 * dyy
+        det = f00 * f11 - f01 * f10
+        if not det > 0.0:
+            # an inverted (or flattened) element, as a Newton iterate may try: no stress
+            # exists; NaN tells the solver (a failed iterate, not a crash)
+            for j in range(N_STATE):
+                state1[q, j] = state0[q, j]
+            for j in range(4):
+                stress[q, j] = math.nan
+            energy[q] = math.nan
+            continue
         bxx = 2.0 * h00 + h00 * h00 + h01 * h01 + t00 * f00 + t01 * f01
         byy = 2.0 * h11 + h10 * h10 + h11 * h11 + t10 * f10 + t11 * f11
         bxy = h01 + h10 + h00 * h10 + h01 * h11 + t00 * f10 + t01 * f11
@@ -112,7 +122,6 @@ def finite_plastic_update(grad, state0, state1, stress, energy, qps, prm, dt):
             ezz_prev = 0.0
         sxx, syy, sxy, szz, nxx, nyy, nzz, nxy, a1, ezz = _point_update(
             exx, eyy, exy, ezz_prev, 0.0, 0.0, pzz0, 0.0, state0[q, S_ALPHA], prm, dt)
-        det = f00 * f11 - f01 * f10
         i00 = f11 / det
         i01 = -f01 / det
         i10 = -f10 / det

@@ -536,6 +536,25 @@ class Joints(Interaction):
         bonded[self.dry_blocks] = False
         c.exclude(self.seg_key[~self.released], bonded)
 
+    def set_friction(self, material: JointMaterial, tan_phi: float) -> int:
+        """Give the joints of ``material`` the friction coefficient ``tan_phi`` from now
+        on (a continuation in friction: a backfill's interfaces held stuck while it takes
+        its weight, then released to their own friction in steps). ``material`` needs an
+        explicit ``kn`` and ``ks`` (its joints are then told by their properties).
+
+        Returns:
+            The number of property rows changed (0: no joint of that material).
+        """
+        if material.kn is None or material.ks is None:
+            raise ValueError("set_friction needs a joint material with explicit kn and ks")
+        if not (np.isfinite(tan_phi) and tan_phi >= 0):
+            raise ValueError(f"tan_phi must be finite and >= 0, got {tan_phi}")
+        ref = material.row(1.0, 0.0, 1.0)
+        other = np.arange(JK.N_PROPS) != JK.P_TANPHI
+        rows = np.flatnonzero(np.all(self.props[:, other] == ref[other], axis=1))
+        self.props[rows, JK.P_TANPHI] = float(tan_phi)
+        return int(rows.size)
+
     # ------------------------------------------------------------------ results
     def energies(self) -> dict[str, float]:
         """Elastic energy stored in the joints and energy dissipated by them [J]."""

@@ -1,0 +1,117 @@
+"""Fill over an arch: the block of backfill between the extrados, the abutments, two
+retaining end walls and the road, for a continuum (Mohr–Coulomb) fill model.
+
+In a plane (2-D) model of an arch bridge the fill is retained at its two ends; here by two
+rigid walls (``wall:left``, ``wall:right``) standing on the outer faces of the abutments
+from their base to the road, which the caller fixes with the abutments. The spandrel walls
+of a real bridge lie outside the plane and are not modelled. Units: metres.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from masonry_fdem.geometry.layout import BlockLayout
+
+__all__ = ["fill_layout", "upper_envelope"]
+
+
+def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None) -> np.ndarray:
+    """Highest y [m] of the block outlines on each vertical line x [m] (-inf where no
+    block, or none whose name starts with ``names``, spans x)."""
+    x = np.atleast_1d(np.asarray(x, dtype=float))
+    best = np.full(x.shape, -np.inf)
+    for poly, name in zip(layout.polygons, layout.names, strict=True):
+        if names is not None and not name.startswith(names):
+            continue
+        a, b = poly, np.roll(poly, -1, axis=0)
+        sloped = b[:, 0] != a[:, 0]
+        a, b = a[sloped], b[sloped]
+        lo, hi = np.minimum(a[:, 0], b[:, 0]), np.maximum(a[:, 0], b[:, 0])
+        inside = (lo[None, :] <= x[:, None]) & (x[:, None] <= hi[None, :])
+        t = (x[:, None] - a[None, :, 0]) / (b[None, :, 0] - a[None, :, 0])
+        y = np.where(inside, a[None, :, 1] + t * (b[None, :, 1] - a[None, :, 1]), -np.inf)
+        if y.size:
+            best = np.maximum(best, y.max(axis=1))
+    return best
+
+
+def fill_layout(
+    structure: BlockLayout,
+    *,
+    cover: float,
+    wall_thickness: float = 0.3,
+    road_points: Sequence[float] = (),
+    material: str = "fill",
+    wall_material: str = "abutment",
+) -> BlockLayout:
+    """The fill over the arch of ``structure`` and its two retaining end walls.
+
+    The fill spans the structure's width (the outer faces of its abutments); it lies on
+    the upper envelope of the voussoirs and abutments (the extrados and the abutment
+    tops), and its top, the road, is ``cover`` above the highest point of the extrados
+    (the crown). Its outline has every vertex of the envelope, so the fill's mesh meets
+    the extrados node to node at the start.
+
+    Args:
+        structure: the arch with its abutments (e.g. :func:`arch_layout` with
+            ``abutment_height > 0``); voussoirs are named ``voussoir:*``.
+        cover: fill depth over the crown's extrados [m], > 0.
+        wall_thickness: thickness [m] of each end wall.
+        road_points: x [m] that get a vertex on the road (where loads bear).
+        material: material name of the fill.
+        wall_material: material name of the end walls.
+
+    Returns:
+        The blocks ``fill``, ``wall:left``, ``wall:right`` (the structure not included).
+
+    Raises:
+        ValueError: no voussoir in ``structure``, a cover or wall thickness <= 0, or a
+            road point off the fill.
+    """
+    if not (np.isfinite(cover) and cover > 0.0):
+        raise ValueError(f"fill cover must be > 0 m, got {cover}")
+    if not (np.isfinite(wall_thickness) and wall_thickness > 0.0):
+        raise ValueError(f"wall_thickness must be > 0 m, got {wall_thickness}")
+    if not any(n.startswith("voussoir:") for n in structure.names):
+        raise ValueError("no voussoir in the structure: the fill needs an arch under it")
+    xmin, ymin, xmax, _ = structure.bounds
+    span = xmax - xmin
+    tol = 1e-9 * span
+    # the x of the vertices on the envelope (those of lower faces would put needless
+    # vertices, and needle triangles, on the extrados' chords)
+    allv = np.vstack(structure.polygons)
+    on_top = allv[:, 1] >= upper_envelope(structure, allv[:, 0]) - tol
+    verts = np.unique(allv[on_top, 0])
+    # the envelope at each vertex, from both sides where it jumps (a vertical face)
+    left = upper_envelope(structure, np.clip(verts - tol, xmin, xmax))
+    right = upper_envelope(structure, np.clip(verts + tol, xmin, xmax))
+    here = upper_envelope(structure, verts)
+    bottom = []
+    near = 1e-6 * span  # a jump or a new vertex: farther than this [m]
+    for x, yl, y0, yr in zip(verts, left, here, right, strict=True):
+        for y in ((yl, y0, yr) if abs(yl - yr) > near else (y0,)):
+            if np.isfinite(y) and (not bottom or np.hypot(x - bottom[-1][0],
+                                                          y - bottom[-1][1]) > near):
+                bottom.append((x, y))
+    bottom = np.array(bottom)
+    if not np.all(np.isfinite(bottom)):
+        raise ValueError("the structure has a gap under the fill")
+    crown = float(upper_envelope(structure, verts, "voussoir:")[
+        np.isfinite(upper_envelope(structure, verts, "voussoir:"))].max())
+    road = crown + float(cover)
+    if bottom[:, 1].max() >= road - tol:
+        raise ValueError(f"the abutments reach the road (cover {cover} m over the crown)")
+    pts = sorted({float(x) for x in road_points}, reverse=True)
+    for x in pts:
+        if not xmin < x < xmax:
+            raise ValueError(f"road point x = {x:g} m is off the fill ({xmin:g} to {xmax:g} m)")
+    top = [(x, road) for x in pts if tol < x - xmin and tol < xmax - x]
+    fill = np.vstack([bottom, [(xmax, road)], np.array(top).reshape(-1, 2), [(xmin, road)]])
+    t = float(wall_thickness)
+    walls = [np.array([(xmin - t, ymin), (xmin, ymin), (xmin, road), (xmin - t, road)]),
+             np.array([(xmax, ymin), (xmax + t, ymin), (xmax + t, road), (xmax, road)])]
+    return BlockLayout((fill, *walls), (material, wall_material, wall_material),
+                       ("fill", "wall:left", "wall:right"))
