@@ -11,7 +11,7 @@ MPIRUN := $(VENV)/bin/mpirun
 EXTRAS ?= test,wheel
 VENV_FLAGS ?=
 
-.PHONY: demo demo-search demo-trl test test-serial test-parallel precompile bench clean venv
+.PHONY: demo demo-search demo-trl demo-bridge test test-serial test-parallel precompile bench clean venv
 
 PYTHON ?= $(shell bash tools/find_python.sh)
 
@@ -36,11 +36,17 @@ demo: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/materials.py --out out_materials
 	$(MPIRUN) -n $(NP) $(PY) demos/silo.py --out out_silo
 	$(MPIRUN) -n $(NP) $(PY) demos/trl_arch.py --coarse --out out_trl_coarse
+	$(MPIRUN) -n $(NP) $(PY) demos/bridge.py --coarse --out out_bridge_coarse
 
 # the TRL three-ring arch, unstrengthened and anchored, one rank each (issue #21; about
 # 5 minutes on 2 cores)
 demo-trl: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/trl_arch.py --out out_trl
+
+# a single-span arch bridge with fill: collapse load against the axle's position, eight
+# positions, with fill and bare (issue #22; about 4 minutes on 2 cores)
+demo-bridge: precompile
+	$(MPIRUN) -n $(NP) $(PY) demos/bridge.py --out out_bridge
 
 # a small anchor layout search, then layouts per hour on the reference arch (under a
 # minute on 2 cores)
