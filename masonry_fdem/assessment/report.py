@@ -85,9 +85,8 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                 lo, hi = comm.bcast((float(lo), float(hi)), root=0)
                 plot_blocks(model, tmp / "vertical_stress.png", field=cells / 1e3, scale=1.0,
                             cmap="viridis_r", clim=(lo, min(hi, 0.0) if lo < 0 else hi),
-                            title=f"{case.name}: vertical stress σ_yy [kPa] at the peak load"
-                                  f"\n{load / 1e3:.2f} kN, {disp * 1e3:.3f} mm; compression < 0, "
-                                  "colours clipped at 1 % and 99 %")
+                            title=f"{case.name}\nσ_yy [kPa] at the peak: {load / 1e3:.1f} kN, "
+                                  f"{disp * 1e3:.1f} mm (clipped at 1 %, 99 %)")
                 drawn.append(("vertical stress at the peak load", "vertical_stress.png", load,
                               disp))
             finally:
