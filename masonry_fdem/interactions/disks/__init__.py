@@ -28,7 +28,7 @@ def precompile() -> None:
     d.cell_stress((-1.0, -1.0), (1.0, 1.0))
     d.contact_counts()
     _kernels.love_sum_points(d.x, np.zeros(1, dtype=np.int64), np.zeros((1, 2)),
-                             np.zeros((1, 2)), -1.0, 1.0, 1.0, np.zeros((2, 2)))
+                             np.zeros((1, 2)), -1.0, -1.0, 1.0, 1.0, np.zeros((2, 2)))
     _kernels.brute_force_disk_pairs(d.x, d.r, 0.1)
     _kernels.hertz_force(1.0, 0.5, 0.1, 0.2)
     _kernels.max_node_move(np.zeros(8), np.zeros(8), np.arange(4, dtype=np.int64))
