@@ -8,7 +8,9 @@ statically at each (Newton, arc length), and each time also without its fill (th
 ring, with its rigid-block limit load). The positions are shared among the ranks (one
 rank per run). Prints and writes to ``--out``:
 
-* ``sweep.md``: collapse load against position, with fill and bare, each run's status;
+* ``sweep.md``: collapse load against position, with fill and bare, each run's status,
+  beside the limit analysis of the ring with the fill as loads (its weight, the axle
+  dispersed 2:1, no passive resistance) and of the bare ring;
   the critical position (the lowest collapse load with fill) — LimitState:RING's
   question; ``sweep.png`` the same as a plot;
 * a run folder per position with fill (``fill_<position>/``: report, curve, mechanism,
@@ -61,6 +63,15 @@ if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 comm.barrier()
 
+
+
+def _lp(load, status) -> str:
+    """An LP load [N] for the table: "no mechanism" when the LP found none."""
+    if load is None or status != "collapse":
+        return str(status).replace("_", " ")
+    return f"{load / 1e3:.1f}"
+
+
 t0 = time.perf_counter()
 rows = []
 for k in range(comm.rank, len(positions), comm.size):
@@ -74,7 +85,8 @@ for k in range(comm.rank, len(positions), comm.size):
     rows.append(dict(position=pos, load=filled.peak_load, collapsed=filled.collapsed,
                      status=filled.status.status.value, line=filled.status_line,
                      bare=bare.peak_load, bare_collapsed=bare.collapsed,
-                     limit=bare.limit_load, seconds=time.perf_counter() - t))
+                     limit=bare.limit_load, limit_fill=filled.limit_load,
+                     limit_fill_status=filled.limit_status, seconds=time.perf_counter() - t))
     print(f"[rank {comm.rank}] {pos:g} span: with fill {filled.status_line}; bare "
           f"{bare.status_line} ({time.perf_counter() - t:.0f} s)", flush=True)
 rows = sorted((r for part in comm.allgather(rows) for r in part), key=lambda r: r["position"])
@@ -84,15 +96,18 @@ if comm.rank == 0:
     crit = min(proved, key=lambda r: r["load"]) if proved else None
     lines = [f"# {case.name}: collapse load against the axle's position", "",
              f"{len(rows)} positions, {time.perf_counter() - t0:.0f} s on {comm.size} "
-             f"rank(s). Loads per {case.arch.width:g} m of barrel width; the bare ring's "
-             "limit load is the rigid-block LP of the same ring and load on its extrados.",
-             "", "| position / span | with fill [kN] | [t] | status | bare ring [kN] | "
-             "LP bare [kN] | fill / bare |", "|---|---|---|---|---|---|---|"]
+             f"rank(s). Loads per {case.arch.width:g} m of barrel width. LP: the rigid-block "
+             "limit analysis of the same ring — bare, and with the fill as loads (its "
+             "weight over the extrados, the axle dispersed 2:1; no passive resistance).",
+             "", "| position / span | with fill [kN] | [t] | status | LP with fill [kN] | "
+             "bare ring [kN] | LP bare [kN] | fill / bare |",
+             "|---|---|---|---|---|---|---|---|"]
     for r in rows:
         mark = "" if r["collapsed"] else "≥ "
         bmark = "" if r["bare_collapsed"] else "≥ "
         lines.append(f"| {r['position']:g} | {mark}{r['load'] / 1e3:.1f} | "
                      f"{mark}{r['load'] / TONNE:.2f} | {r['status']} | "
+                     f"{_lp(r['limit_fill'], r['limit_fill_status'])} | "
                      f"{bmark}{r['bare'] / 1e3:.2f} | "
                      f"{(r['limit'] or float('nan')) / 1e3:.2f} | "
                      f"{r['load'] / r['bare']:.2f} |")
@@ -124,6 +139,9 @@ if comm.rank == 0:
     ax.plot(x, [r["bare"] / 1e3 for r in rows], "s-", color="C1", ms=4, label="bare ring")
     ax.plot(x, [(r["limit"] or np.nan) / 1e3 for r in rows], "x--", color="C3",
             label="bare ring, limit analysis")
+    ax.plot(x, [r["limit_fill"] / 1e3 if r["limit_fill_status"] == "collapse" else np.nan
+                for r in rows], "+--", color="C2", ms=9,
+            label="limit analysis, fill as loads (no passive)")
     if crit is not None:
         ax.axvline(crit["position"], color="0.5", ls=":", lw=1)
     ax.set_xlabel("axle position / span")

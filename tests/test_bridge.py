@@ -19,7 +19,7 @@ import pytest
 from masonry_fdem.assessment.assess import assess, build_model
 from masonry_fdem.assessment.case import CaseError, load_case
 from masonry_fdem.geometry import arch_layout, polygon_area
-from masonry_fdem.geometry.fill import fill_layout, upper_envelope
+from masonry_fdem.geometry.fill import fill_layout, fill_loads, upper_envelope
 from masonry_fdem.materials import MohrCoulomb
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -108,7 +108,7 @@ def test_fill_case_loads_and_builds():
     assert model.hypotheses["fill"].value == "plane_strain"
     assert model.hypotheses["brick"].value == "plane_stress"
     assert {p.name for p in model.prescriptions} == {"abutments", "walls", "beam guide"}
-    # the limit analysis stays that of the bare arch (its load on the extrados)
+    # the limit analysis loads the ring with the fill's weight and the dispersed axle
     assert case.limit_analysis().status == "collapse"
 
 
@@ -129,7 +129,7 @@ def test_bad_fill_cases_are_named(changes, expected):
 
 
 def _run(fill: bool, comm):
-    d = small() if fill else small(fill__cover=None)
+    d = small()
     if not fill:
         d.pop("fill")
     return assess(load_case(d), write=False, progress=False, comm=comm)
@@ -197,3 +197,32 @@ def test_bridge_demo_sweeps_positions_and_draws_the_stress(tmp_path, monkeypatch
         assert (out / "sweep.png").is_file()
         assert (out / "vertical_stress_0.25.png").is_file()
         assert (out / "fill_0.5" / "report.md").is_file()
+
+
+def test_limit_analysis_with_the_fill_as_loads():
+    """The fill as loads on the rigid ring (its weight over each chord of the extrados, the
+    axle dispersed 2:1): the loads add up (the fill's weight over the voussoirs, 1 N of
+    live load), the ring carries more than bare, less than the FDEM bridge does with the
+    fill's strength and passive resistance (test above: 67 kN at quarter span)."""
+    case = load_case(small())
+    arch = case.layout()
+    road = case.road_level()
+    rho = SMALL["materials"]["fill"]["density"]
+    dead, live = fill_loads(arch, road=road, unit_weight=rho * 9.81, patch=(-0.5, 0.2))
+    assert sum(f[1] for _, f in live) == pytest.approx(-1.0)
+    # the weight of the fill over the ring's extrados, from its own envelope
+    vs = np.vstack([p for p, n in zip(arch.polygons, arch.names) if n.startswith("vous")])
+    xs = np.linspace(vs[:, 0].min(), vs[:, 0].max(), 40001)
+    column = np.trapezoid(road - upper_envelope(arch, xs, "voussoir:"), xs)
+    assert -sum(f[1] for _, f in dead) == pytest.approx(rho * 9.81 * column, rel=1e-4)
+    # the 2:1 spread: live load only on chords within b/2 + depth/2 of the patch centre
+    for (x, y), _ in live:
+        assert abs(x + 0.5) <= 0.1 + 0.5 * (road - y) + 0.1
+    la = case.limit_analysis()
+    bare = load_case({k: v for k, v in small().items() if k != "fill"}).limit_analysis()
+    print(f"\nlimit analysis at quarter span: bare {bare.load_factor / 1e3:.2f} kN, fill as "
+          f"loads {la.load_factor / 1e3:.2f} kN")
+    assert la.status == "collapse" and bare.status == "collapse"
+    assert 2.0 * bare.load_factor < la.load_factor < 67e3
+    with pytest.raises(ValueError, match="width > 0"):
+        fill_loads(arch, road=road, unit_weight=1.0, patch=(0.0, 0.0))

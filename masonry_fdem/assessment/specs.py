@@ -555,15 +555,31 @@ class ArchCase:
     def limit_analysis(self, **kw: Any):
         """Rigid-block collapse load of the case by
         :func:`~masonry_fdem.solvers.limit_analysis.limit_analysis`: the live load is 1 N shared by
-        :meth:`load_points`, so the load factor is the collapse load [N]. Keywords
-        override the arguments (e.g. ``friction``)."""
+        :meth:`extrados_load_points`, so the load factor is the collapse load [N]. With
+        ``[fill]``, the fill enters as loads (:func:`~masonry_fdem.geometry.fill.fill_loads`):
+        its weight over the extrados, and the live load dispersed 2:1 down to the extrados;
+        its passive resistance is left out (a lower estimate). Keywords override the
+        arguments (e.g. ``friction``)."""
         from masonry_fdem.solvers.limit_analysis import limit_analysis
 
         pts = self.extrados_load_points()
+        live = [((p[0], p[1]), (0.0, -1.0 / len(pts))) for p in pts]
+        dead = []
+        if self.fill is not None:
+            # the fill as loads on the rigid ring (RING's way, without passive resistance):
+            # its weight over each chord of the extrados, the load dispersed 2:1
+            from masonry_fdem.geometry.fill import fill_loads
+
+            rho = self.material_table[self.fill.material].density
+            dead, live = fill_loads(
+                self.layout(), road=self.road_level(), unit_weight=rho * G * self.arch.width,
+                patch=(self.load_x(), self.loading.spreader_width))
+            if not self.loading.self_weight:
+                dead = []
         args = dict(
             density={n: m.density for n, m in self.material_table.items()},
             width=self.arch.width, supports="abutment:*",
-            live_loads=[((p[0], p[1]), (0.0, -1.0 / len(pts))) for p in pts],
+            live_loads=live, dead_loads=dead,
             friction=self.analysis.friction, g=G if self.loading.self_weight else 0.0,
             max_load_factor=self.loading.max_load or 1e9)
         args.update(kw)

@@ -15,7 +15,7 @@ import numpy as np
 
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["fill_layout", "upper_envelope"]
+__all__ = ["fill_layout", "fill_loads", "upper_envelope"]
 
 
 def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None) -> np.ndarray:
@@ -115,3 +115,58 @@ def fill_layout(
              np.array([(xmax, ymin), (xmax + t, ymin), (xmax + t, road), (xmax, road)])]
     return BlockLayout((fill, *walls), (material, wall_material, wall_material),
                        ("fill", "wall:left", "wall:right"))
+
+
+def fill_loads(
+    structure: BlockLayout,
+    *,
+    road: float,
+    unit_weight: float,
+    patch: tuple[float, float],
+    spread: float = 0.5,
+) -> tuple[list, list]:
+    """The fill as loads on a rigid-block arch, for limit analysis (the way RING treats
+    fill without its passive resistance): the weight of the fill column over each chord of
+    the extrados, and a unit live load on the road dispersed down to the extrados.
+
+    Args:
+        structure: the arch and its abutments (voussoirs named ``voussoir:*``).
+        road: y of the road [m].
+        unit_weight: γ w, the fill's weight per unit volume times the barrel width [N/m³·m].
+        patch: (x centre, width) [m] of the load on the road (width > 0).
+        spread: horizontal spread per unit depth on each side (0.5: the 2:1 rule, a
+            dispersion angle of 26.6° from the vertical).
+
+    Returns:
+        ``(dead, live)``: ``((x, y), (0, −F))`` point loads [N] on the extrados, the dead
+        ones the fill's weight, the live ones summing to 1 N.
+    """
+    x0, b = float(patch[0]), float(patch[1])
+    if not b > 0:
+        raise ValueError(f"the load patch needs a width > 0 m, got {b}")
+    vs = np.vstack([p for p, n in zip(structure.polygons, structure.names, strict=True)
+                    if n.startswith("voussoir:")])
+    top = upper_envelope(structure, vs[:, 0], "voussoir:")
+    xs = np.unique(vs[vs[:, 1] >= top - 1e-9 * np.ptp(vs[:, 0]), 0])
+    dead, live = [], []
+    weights = []
+    for xa, xb in zip(xs[:-1], xs[1:], strict=True):
+        t = np.linspace(xa, xb, 9)
+        y = upper_envelope(structure, t, "voussoir:")
+        depth = road - y
+        area = np.trapezoid(depth, t)
+        xc = float(np.trapezoid(depth * t, t) / area) if area > 0 else 0.5 * (xa + xb)
+        yc = float(upper_envelope(structure, np.array([xc]), "voussoir:")[0])
+        if area > 0:
+            dead.append(((xc, yc), (0.0, -unit_weight * area)))
+        # the dispersed patch at this chord's depth: [x0 - b/2 - s h, x0 + b/2 + s h]
+        h = float(road - yc)
+        half = 0.5 * b + spread * h
+        lo, hi = max(xa, x0 - half), min(xb, x0 + half)
+        if hi > lo:
+            weights.append(((xc, yc), (hi - lo) / (2.0 * half)))
+    total = sum(w for _, w in weights)
+    if total <= 0:
+        raise ValueError(f"the load patch at x = {x0:g} m disperses onto no voussoir")
+    live = [(p, (0.0, -w / total)) for p, w in weights]
+    return dead, live
