@@ -145,6 +145,18 @@ def dr_update(u, v, f_int, f_ext, mfict, presc, c, dt, first):
         u[i] += dt * vn
 
 
+@njit(cache=True)
+def dot(a, b):
+    """Σ a_i b_i of two 1D float arrays, one thread. The explicit step's work bookkeeping
+    uses it instead of ``np.dot``: OpenBLAS threads a dot product above 10 000 entries (a
+    disk set of 5 000 disks), and on 2 cores shared with MPI ranks those threads made the
+    step of a 5 000-disk fill 5-50x slower (0.7 ms -> 7-34 ms, benchmarks/bridge_disks.py)."""
+    s = 0.0
+    for i in range(a.size):
+        s += a[i] * b[i]
+    return s
+
+
 def precompile() -> None:
     """Compile this module's kernels on tiny arrays of the production dtypes."""
     n = 6
@@ -155,3 +167,4 @@ def precompile() -> None:
     dr_measure(u, u, v, f, f, f, m, mask, np.zeros(4))
     dr_update(u, v, f, f, m, mask, 0.0, 1.0, True)
     dr_velocity_quotient(v, f, f.copy(), m, mask, True, np.zeros(6)[4:])
+    dot(u, v)

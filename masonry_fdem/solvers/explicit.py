@@ -227,7 +227,7 @@ class ExplicitSolver:
                                       s.energy, s.du, s.local)
         for k, st in enumerate(self._states):
             for s in self.sets:
-                self.work[int(s.replicated), k] += np.dot(st.f[s.name], s.du)
+                self.work[int(s.replicated), k] += K.dot(st.f[s.name], s.du)
         self.t += self.dt
         self.n += 1
 

@@ -34,3 +34,8 @@ def precompile() -> None:
     _kernels.max_node_move(np.zeros(8), np.zeros(8), np.arange(4, dtype=np.int64))
     _facet_kernels.precompile()
     pack_disks(np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]), 0.1, 0.15, 0.5)
+    from masonry_fdem.interactions.disks import fill
+
+    fill._inside_clear(np.zeros((1, 2)), np.ones(1), np.array([[0.0, 0.0], [1.0, 0.0],
+                                                               [0.0, 1.0]]), 0.0,
+                       np.zeros(1, dtype=np.int8))
