@@ -390,11 +390,9 @@ class ArchCase:
 
     def road_level(self) -> float:
         """y [m] of the road over the fill (``[fill]`` cases)."""
-        from masonry_fdem.geometry.fill import upper_envelope
+        from masonry_fdem.geometry.fill import crown_height
 
-        vs = np.vstack([p for p, n in zip(self.layout().polygons, self.layout().names,
-                                          strict=True) if n.startswith("voussoir:")])
-        crown = float(np.max(upper_envelope(self.layout(), vs[:, 0], "voussoir:")))
+        crown = crown_height(self.layout())
         return crown + self.fill.cover
 
     def materials(self) -> dict[str, Material]:

@@ -15,7 +15,7 @@ import numpy as np
 
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["fill_layout", "fill_loads", "upper_envelope"]
+__all__ = ["crown_height", "extrados_vertices", "fill_layout", "fill_loads", "upper_envelope"]
 
 
 def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None) -> np.ndarray:
@@ -36,6 +36,22 @@ def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None)
         if y.size:
             best = np.maximum(best, y.max(axis=1))
     return best
+
+
+def extrados_vertices(structure: BlockLayout) -> np.ndarray:
+    """``(k, 2)`` vertices [m] of the voussoirs that lie on their upper envelope (the
+    extrados), in increasing x."""
+    vs = np.vstack([p for p, n in zip(structure.polygons, structure.names, strict=True)
+                    if n.startswith("voussoir:")])
+    top = upper_envelope(structure, vs[:, 0], "voussoir:")
+    on = vs[vs[:, 1] >= top - 1e-9 * np.ptp(vs[:, 0])]
+    _, first = np.unique(on[:, 0], return_index=True)
+    return on[first]
+
+
+def crown_height(structure: BlockLayout) -> float:
+    """y [m] of the highest extrados vertex (the crown's extrados)."""
+    return float(extrados_vertices(structure)[:, 1].max())
 
 
 def fill_layout(
@@ -99,8 +115,7 @@ def fill_layout(
     bottom = np.array(bottom)
     if not np.all(np.isfinite(bottom)):
         raise ValueError("the structure has a gap under the fill")
-    crown = float(upper_envelope(structure, verts, "voussoir:")[
-        np.isfinite(upper_envelope(structure, verts, "voussoir:"))].max())
+    crown = crown_height(structure)
     road = crown + float(cover)
     if bottom[:, 1].max() >= road - tol:
         raise ValueError(f"the abutments reach the road (cover {cover} m over the crown)")
@@ -144,10 +159,7 @@ def fill_loads(
     x0, b = float(patch[0]), float(patch[1])
     if not b > 0:
         raise ValueError(f"the load patch needs a width > 0 m, got {b}")
-    vs = np.vstack([p for p, n in zip(structure.polygons, structure.names, strict=True)
-                    if n.startswith("voussoir:")])
-    top = upper_envelope(structure, vs[:, 0], "voussoir:")
-    xs = np.unique(vs[vs[:, 1] >= top - 1e-9 * np.ptp(vs[:, 0]), 0])
+    xs = extrados_vertices(structure)[:, 0]
     dead, live = [], []
     weights = []
     for xa, xb in zip(xs[:-1], xs[1:], strict=True):
