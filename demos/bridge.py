@@ -9,10 +9,12 @@ ring, with its rigid-block limit load). The positions are shared among the ranks
 rank per run). Prints and writes to ``--out``:
 
 * ``sweep.md``: collapse load against position, with fill and bare, each run's status,
-  beside the limit analysis of the ring with the fill as loads (its weight, the axle
-  dispersed 2:1, no passive resistance) and of the bare ring;
-  the critical position (the lowest collapse load with fill) — LimitState:RING's
-  question; ``sweep.png`` the same as a plot;
+  beside the limit analysis of the ring with the fill as RING models it (its weight, the
+  axle dispersed 2:1, a passive resistance up to the case's ``passive_mobilisation`` of
+  Rankine's) and of the bare ring; the critical position (the lowest collapse load with
+  fill) — LimitState:RING's question — of the FDEM among the positions run, and of the
+  limit analysis on a fine grid of positions (with and without the passive resistance);
+  ``sweep.png`` the same as a plot;
 * a run folder per position with fill (``fill_<position>/``: report, curve, mechanism,
   ``vertical_stress.png`` — the vertical stress in the fill and the arch at the peak load,
   the load's path through the fill); the critical position's and the mid-span one's
@@ -91,14 +93,34 @@ for k in range(comm.rank, len(positions), comm.size):
           f"{bare.status_line} ({time.perf_counter() - t:.0f} s)", flush=True)
 rows = sorted((r for part in comm.allgather(rows) for r in part), key=lambda r: r["position"])
 
+def _lp_sweep(xs: np.ndarray, passive: bool) -> np.ndarray:
+    """Limit load [N] with fill at each position (NaN where the LP finds no mechanism)."""
+    out = []
+    for pos in xs:
+        res = replace(case, loading=replace(case.loading, position=float(pos))).limit_analysis(
+            passive=passive)
+        out.append(res.load_factor if res.status == "collapse" else np.nan)
+    return np.array(out)
+
+
+def _critical(xs: np.ndarray, loads: np.ndarray) -> str:
+    if not np.isfinite(loads).any():
+        return "none (no mechanism at any position)"
+    k = int(np.nanargmin(loads))
+    return f"{xs[k]:g} of the span ({loads[k] / 1e3:.1f} kN)"
+
+
 if comm.rank == 0:
+    fine = np.round(np.arange(0.05, 0.5001, 0.025), 3)
+    lp_fine, lp_none = _lp_sweep(fine, True), _lp_sweep(fine, False)
     proved = [r for r in rows if r["collapsed"]]
     crit = min(proved, key=lambda r: r["load"]) if proved else None
     lines = [f"# {case.name}: collapse load against the axle's position", "",
              f"{len(rows)} positions, {time.perf_counter() - t0:.0f} s on {comm.size} "
              f"rank(s). Loads per {case.arch.width:g} m of barrel width. LP: the rigid-block "
-             "limit analysis of the same ring — bare, and with the fill as loads (its "
-             "weight over the extrados, the axle dispersed 2:1; no passive resistance).",
+             "limit analysis of the same ring — bare, and with the fill as RING models it "
+             "(its weight over the extrados, the axle dispersed 2:1, a passive resistance "
+             f"up to {case.fill.passive_mobilisation:g} of Rankine's).",
              "", "| position / span | with fill [kN] | [t] | status | LP with fill [kN] | "
              "bare ring [kN] | LP bare [kN] | fill / bare |",
              "|---|---|---|---|---|---|---|---|"]
@@ -119,6 +141,10 @@ if comm.rank == 0:
         lines.append(f"Critical position: {crit['position']:g} of the span, collapse load "
                      f"{crit['load'] / 1e3:.1f} kN ({crit['load'] / TONNE:.2f} t) — among the "
                      "positions run, whose runs proved a collapse (*peak passed*).")
+    lines += ["", f"Limit analysis with fill on a grid of {fine.size} positions (rigid ring, "
+              "seconds): critical position " + _critical(fine, lp_fine) + f" with passive "
+              f"resistance (m = {case.fill.passive_mobilisation:g}); "
+              + _critical(fine, lp_none) + " without."]
     text = "\n".join(lines) + "\n"
     (out / "sweep.md").write_text(text, encoding="utf-8")
     print(text)
@@ -139,9 +165,10 @@ if comm.rank == 0:
     ax.plot(x, [r["bare"] / 1e3 for r in rows], "s-", color="C1", ms=4, label="bare ring")
     ax.plot(x, [(r["limit"] or np.nan) / 1e3 for r in rows], "x--", color="C3",
             label="bare ring, limit analysis")
-    ax.plot(x, [r["limit_fill"] / 1e3 if r["limit_fill_status"] == "collapse" else np.nan
-                for r in rows], "+--", color="C2", ms=9,
-            label="limit analysis, fill as loads (no passive)")
+    ax.plot(fine, lp_fine / 1e3, "--", color="C2", lw=1.2,
+            label=f"limit analysis with fill (passive × {case.fill.passive_mobilisation:g})")
+    ax.plot(fine, lp_none / 1e3, ":", color="C2", lw=1.2,
+            label="limit analysis with fill, no passive")
     if crit is not None:
         ax.axvline(crit["position"], color="0.5", ls=":", lw=1)
     ax.set_xlabel("axle position / span")

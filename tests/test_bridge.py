@@ -19,7 +19,8 @@ import pytest
 from masonry_fdem.assessment.assess import assess, build_model
 from masonry_fdem.assessment.case import CaseError, load_case
 from masonry_fdem.geometry import arch_layout, polygon_area
-from masonry_fdem.geometry.fill import fill_layout, fill_loads, upper_envelope
+from masonry_fdem.geometry.fill import extrados_vertices, fill_layout, fill_loads, fill_passive
+from masonry_fdem.geometry.fill import passive_coefficient, upper_envelope
 from masonry_fdem.materials import MohrCoulomb
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -219,7 +220,7 @@ def test_limit_analysis_with_the_fill_as_loads():
     # the 2:1 spread: live load only on chords within b/2 + depth/2 of the patch centre
     for (x, y), _ in live:
         assert abs(x + 0.5) <= 0.1 + 0.5 * (road - y) + 0.1
-    la = case.limit_analysis()
+    la = case.limit_analysis(passive=False)
     bare = load_case({k: v for k, v in small().items() if k != "fill"}).limit_analysis()
     print(f"\nlimit analysis at quarter span: bare {bare.load_factor / 1e3:.2f} kN, fill as "
           f"loads {la.load_factor / 1e3:.2f} kN")
@@ -227,3 +228,46 @@ def test_limit_analysis_with_the_fill_as_loads():
     assert 2.0 * bare.load_factor < la.load_factor < 67e3
     with pytest.raises(ValueError, match="width > 0"):
         fill_loads(arch, road=road, unit_weight=1.0, patch=(0.0, 0.0))
+
+
+def test_limit_analysis_with_the_fills_passive_resistance():
+    """RING's fill: the passive resistance on the extrados is Rankine's passive pressure
+    times the mobilisation factor m, integrated over each chord's vertical extent; over a
+    half ring from the springing (y0) to the crown (y1) it sums to
+    m [K_p γ (road (y1 − y0) − (y1² − y0²) / 2) + 2 c √K_p (y1 − y0)] (pressure linear in
+    depth: the trapezoidal rule is exact). With it the limit load rises, the more the
+    larger m; m = 0 gives the LP without it."""
+    case = load_case(small())
+    arch, road = case.layout(), case.road_level()
+    fm = SMALL["materials"]["fill"]
+    gamma, c, phi = fm["density"] * 9.81, fm["c"], fm["phi"]
+    kp = passive_coefficient(phi)
+    assert kp == pytest.approx((1 + math.sin(math.radians(35))) / (1 - math.sin(math.radians(35))))
+    assert kp == pytest.approx(3.690, abs=1e-3)
+    m = 0.5
+    forces = fill_passive(arch, road=road, unit_weight=gamma, phi=phi, cohesion=c, mobilisation=m)
+    v = extrados_vertices(arch)
+    y0, y1 = v[0, 1], v[:, 1].max()
+    half = m * (kp * gamma * (road * (y1 - y0) - 0.5 * (y1**2 - y0**2))
+                + 2 * c * math.sqrt(kp) * (y1 - y0))
+    left = sum(f[2][1] for f in forces if f[1][0] > 0)
+    right = sum(f[2][1] for f in forces if f[1][0] < 0)
+    assert left == pytest.approx(half, rel=1e-9) and right == pytest.approx(half, rel=1e-9)
+    # each acts on its chord, towards the span's middle, between its ends' heights
+    for (x, y), (dx, dy), (lo, hi) in forces:
+        assert dy == 0.0 and dx == -math.copysign(1.0, x) and lo == 0.0 and hi > 0.0
+        assert y0 - 1e-12 <= y <= y1 + 1e-12
+    none = case.limit_analysis(passive=False).load_factor
+    loads = []
+    for mob in (0.0, 0.33, 1.0):
+        d = small(fill__passive_mobilisation=mob)
+        loads.append(load_case(d).limit_analysis().load_factor)
+    print("\nlimit analysis at quarter span, passive mobilisation 0 / 0.33 / 1: "
+          + " / ".join(f"{x / 1e3:.2f}" for x in loads) + " kN")
+    assert loads[0] == pytest.approx(none, rel=1e-9)
+    assert loads[0] < loads[1] < loads[2]
+    assert case.limit_analysis().load_factor == pytest.approx(loads[1], rel=1e-9)
+    with pytest.raises(CaseError, match="passive_mobilisation"):
+        load_case(small(fill__passive_mobilisation=1.5))
+    with pytest.raises(ValueError, match="mobilisation"):
+        fill_passive(arch, road=road, unit_weight=gamma, phi=phi, mobilisation=-0.1)

@@ -89,6 +89,33 @@ def test_single_block_sliding():
     assert u > 0.0 and v == pytest.approx(μ * u, rel=1e-9) and abs(ω) < 1e-12
 
 
+def test_bounded_load_resists_up_to_its_cap():
+    """The block of the sliding test held on its far face by a force the LP may choose in
+    [F_min, F_max] (a passive resistance): sliding needs P = μ W + F_max when the force
+    resists it, and P = μ W − F_min when it pushes along (the LP takes the least it may).
+
+    μ W = 588.6 N; overturning would need W b / (2 h) + F h_F / h ≥ 735.8 N, more."""
+    b, h, w, μ = 0.5, 1.0, 0.3, 0.2
+    weight = RHO * b * h * w * G
+    common = dict(density=RHO, width=w, g=G, supports="base", friction=μ,
+                  live_loads=[((0.0, h), (1.0, 0.0))])
+    resist = limit_analysis(_block_on_base(b, h), bounded_loads=[
+        ((b, 0.5 * h), (-2.0, 0.0), (0.0, 100.0))], **common)
+    assert resist.status == LimitStatus.COLLAPSE
+    assert resist.load_factor == pytest.approx(μ * weight + 100.0, rel=1e-6)  # 688.6
+    assert resist.bounded_forces == pytest.approx([100.0], rel=1e-6)
+    along = limit_analysis(_block_on_base(b, h), bounded_loads=[
+        ((b, 0.5 * h), (1.0, 0.0), (50.0, 100.0))], **common)
+    assert along.load_factor == pytest.approx(μ * weight - 50.0, rel=1e-6)  # 538.6
+    assert along.bounded_forces == pytest.approx([50.0], rel=1e-6)
+    for bad, match in [(((b, 0.5), (0.0, 0.0), (0.0, 1.0)), "non-zero direction"),
+                       (((b, 0.5), (1.0, 0.0), (2.0, 1.0)), "F_min <= F_max"),
+                       (((b, 0.5), (1.0, 0.0), (0.0, math.inf)), "F_min <= F_max"),
+                       (((b, 0.5), (1.0, 0.0)), "bounded_loads must be")]:
+        with pytest.raises(ValueError, match=match):
+            limit_analysis(_block_on_base(b, h), bounded_loads=[bad], **common)
+
+
 def _portal() -> BlockLayout:
     return BlockLayout(
         (

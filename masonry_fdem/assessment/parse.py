@@ -17,7 +17,8 @@ import numpy as np
 
 from masonry_fdem.assessment.specs import S_TOL, TONNE_FORCE, AnalysisSpec, AnchorLayout, AnchorSpec
 from masonry_fdem.assessment.specs import ArchCase, ArchSpec, CaseError, Damage, DamageKind
-from masonry_fdem.assessment.specs import FillSpec, LoadControl, LoadingSpec, Objective, SearchSpec
+from masonry_fdem.assessment.specs import PASSIVE_MOBILISATION, FillSpec, LoadControl, LoadingSpec
+from masonry_fdem.assessment.specs import Objective, SearchSpec
 from masonry_fdem.assessment.tables import REQUIRED, Table, show
 from masonry_fdem.geometry.arches import ArchKind, arch_layout
 from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
@@ -33,7 +34,7 @@ _ARCH_KEYS = ("kind", "span", "rise", "rings", "ring_thickness", "voussoirs", "s
 _JOINT_KEYS = tuple(f.name for f in fields(JointMaterial))
 _COULOMB_KEYS = ("c", "phi", "psi")
 _FILL_KEYS = ("cover", "material", "interface_friction", "interface_stiffness", "mesh_size",
-              "wall_thickness")
+              "wall_thickness", "passive_mobilisation")
 _SAND_FORBIDDEN = ("ft", "GfI", "c", "GfII")
 _LOADING_KEYS = ("position", "x", "spreader_width", "increment", "max_load", "self_weight",
                  "control", "displacement_increment", "max_displacement")
@@ -161,9 +162,11 @@ def _parse_fill(t: Table, mats: Mapping[str, Material], arch: ArchSpec | None,
     kn0 = 20.0 * fm.E / size if fm is not None and size else None
     kn = t.number("interface_stiffness", kn0, gt=0.0)
     wall = t.number("wall_thickness", 0.3, gt=0.0)
-    if None in (cover, mat, mu, kn, size, wall):
+    # the part of the passive pressure the limit analysis may mobilise (RING's fill model)
+    passive = t.number("passive_mobilisation", PASSIVE_MOBILISATION, ge=0.0, le=1.0)
+    if None in (cover, mat, mu, kn, size, wall, passive):
         return None
-    spec = FillSpec(cover, mat, mu, kn, size, wall)
+    spec = FillSpec(cover, mat, mu, kn, size, wall, passive)
     return spec
 
 

@@ -104,6 +104,14 @@ class ArchSpec:
         return len(self.joint_positions(ring)) - 1
 
 
+#: default share of Rankine's passive pressure of the fill that the limit analysis may
+#: mobilise against an arch swaying into it: full passive pressure needs a wall movement of
+#: a few percent of its height, far more than an arch sways before it collapses, so
+#: analysts of arches with RING's fill model take a fraction of it; here a third (set it
+#: per case; 0 leaves the passive resistance out).
+PASSIVE_MOBILISATION = 0.33
+
+
 @dataclass(frozen=True)
 class FillSpec:
     """``[fill]``: a continuum (Mohr–Coulomb) backfill over the arch, up to a road
@@ -112,7 +120,10 @@ class FillSpec:
     in plane strain. It touches the extrados, the abutments, the walls and the loading
     beam through a friction-only interface (``interface_friction`` = tan δ, normal
     stiffness ``interface_stiffness`` [Pa/m], shear stiffness kn/2.6) that opens freely.
-    ``mesh_size`` [m] of its triangles; ``wall_thickness`` [m]."""
+    ``mesh_size`` [m] of its triangles; ``wall_thickness`` [m]. In the limit analysis
+    (:meth:`ArchCase.limit_analysis`) the fill is RING's: its weight, the load's 2:1
+    dispersion, and a horizontal passive resistance of up to ``passive_mobilisation``
+    times Rankine's passive pressure on the extrados."""
 
     cover: float
     material: str
@@ -120,6 +131,7 @@ class FillSpec:
     interface_stiffness: float
     mesh_size: float
     wall_thickness: float = 0.3
+    passive_mobilisation: float = PASSIVE_MOBILISATION
 
     def interface(self) -> JointMaterial:
         """The fill's interface as a friction-only joint material."""
@@ -550,22 +562,24 @@ class ArchCase:
         return replace(base, ft=base.ft * factor, c=base.c * factor,
                        fc=None if base.fc is None else base.fc * factor)
 
-    def limit_analysis(self, **kw: Any):
+    def limit_analysis(self, passive: bool = True, **kw: Any):
         """Rigid-block collapse load of the case by
         :func:`~masonry_fdem.solvers.limit_analysis.limit_analysis`: the live load is 1 N shared by
         :meth:`extrados_load_points`, so the load factor is the collapse load [N]. With
         ``[fill]``, the fill enters as loads (:func:`~masonry_fdem.geometry.fill.fill_loads`):
-        its weight over the extrados, and the live load dispersed 2:1 down to the extrados;
-        its passive resistance is left out (a lower estimate). Keywords override the
-        arguments (e.g. ``friction``)."""
+        its weight over the extrados, the live load dispersed 2:1 down to the extrados, and
+        its passive resistance to a ring that sways into it, up to ``passive_mobilisation``
+        times Rankine's (:func:`~masonry_fdem.geometry.fill.fill_passive`; the fill's
+        cohesion included). ``passive=False`` leaves the passive resistance out. Keywords
+        override the arguments (e.g. ``friction``)."""
         from masonry_fdem.solvers.limit_analysis import limit_analysis
 
         pts = self.extrados_load_points()
         live = [((p[0], p[1]), (0.0, -1.0 / len(pts))) for p in pts]
-        dead = []
+        dead, bounded = [], []
         if self.fill is not None:
-            # the fill as loads on the rigid ring (RING's way, without passive resistance):
-            # its weight over each chord of the extrados, the load dispersed 2:1
+            # the fill as RING models it on a rigid ring: its weight over each chord of the
+            # extrados, the load dispersed 2:1, a passive resistance up to m K_p σ_v
             from masonry_fdem.geometry.fill import fill_loads
 
             rho = self.material_table[self.fill.material].density
@@ -574,10 +588,18 @@ class ArchCase:
                 patch=(self.load_x(), self.loading.spreader_width))
             if not self.loading.self_weight:
                 dead = []
+            fm = self.material_table[self.fill.material]
+            if passive and self.fill.passive_mobilisation > 0.0 and self.loading.self_weight:
+                from masonry_fdem.geometry.fill import fill_passive
+
+                bounded = fill_passive(
+                    self.layout(), road=self.road_level(), unit_weight=rho * G * self.arch.width,
+                    phi=fm.phi, cohesion=fm.c, width=self.arch.width,
+                    mobilisation=self.fill.passive_mobilisation)
         args = dict(
             density={n: m.density for n, m in self.material_table.items()},
             width=self.arch.width, supports="abutment:*",
-            live_loads=live, dead_loads=dead,
+            live_loads=live, dead_loads=dead, bounded_loads=bounded,
             friction=self.analysis.friction, g=G if self.loading.self_weight else 0.0,
             max_load_factor=self.loading.max_load or 1e9)
         args.update(kw)

@@ -15,7 +15,15 @@ import numpy as np
 
 from masonry_fdem.geometry.layout import BlockLayout
 
-__all__ = ["crown_height", "extrados_vertices", "fill_layout", "fill_loads", "upper_envelope"]
+__all__ = [
+    "crown_height",
+    "extrados_vertices",
+    "fill_layout",
+    "fill_loads",
+    "fill_passive",
+    "passive_coefficient",
+    "upper_envelope",
+]
 
 
 def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None) -> np.ndarray:
@@ -182,3 +190,69 @@ def fill_loads(
         raise ValueError(f"the load patch at x = {x0:g} m disperses onto no voussoir")
     live = [(p, (0.0, -w / total)) for p, w in weights]
     return dead, live
+
+
+def passive_coefficient(phi: float) -> float:
+    """Rankine's passive earth pressure coefficient ``K_p = (1 + sin φ) / (1 − sin φ)`` of
+    a friction angle ``phi`` [degrees] (a smooth vertical wall, a level surface)."""
+    if not (np.isfinite(phi) and 0.0 <= phi < 90.0):
+        raise ValueError(f"the friction angle must be in [0, 90) degrees, got {phi}")
+    s = np.sin(np.radians(phi))
+    return float((1.0 + s) / (1.0 - s))
+
+
+def fill_passive(
+    structure: BlockLayout,
+    *,
+    road: float,
+    unit_weight: float,
+    phi: float,
+    cohesion: float = 0.0,
+    width: float = 1.0,
+    mobilisation: float = 1.0,
+) -> list:
+    """The passive resistance of the fill to an arch that sways into it, as bounded
+    horizontal forces for limit analysis (the way LimitState:RING models it): on each chord
+    of the extrados, a horizontal force pushing the ring away from the fill whose magnitude
+    the LP may choose between 0 and the passive thrust on the chord's vertical projection,
+
+    .. math:: F_{max} = m \\int (K_p\\, γ z + 2 c \\sqrt{K_p})\\, w\\, dy,
+
+    ``z = road − y`` the depth, ``m`` the mobilisation factor (the part of Rankine's passive
+    pressure the small sway of an arch mobilises; 1 is the full passive state).
+
+    Args:
+        structure: the arch and its abutments (voussoirs named ``voussoir:*``).
+        road: y of the road [m].
+        unit_weight: γ w, the fill's unit weight times the barrel width [N/m³·m].
+        phi: the fill's friction angle [degrees].
+        cohesion: its cohesion c [Pa].
+        width: the barrel width w [m] (for the cohesion's part).
+        mobilisation: m, in [0, 1].
+
+    Returns:
+        ``((x, y), (±1, 0), (0, F_max))`` per chord with a vertical extent: the force acts
+        at the resultant of the pressure on the chord, towards the span's inside (+x where
+        the extrados rises with x, the fill's side being its upper left).
+    """
+    if not (np.isfinite(mobilisation) and 0.0 <= mobilisation <= 1.0):
+        raise ValueError(f"the passive mobilisation factor must be in [0, 1], got {mobilisation}")
+    if not (np.isfinite(cohesion) and cohesion >= 0.0):
+        raise ValueError(f"the fill's cohesion must be >= 0 Pa, got {cohesion}")
+    kp = passive_coefficient(phi)
+    v = extrados_vertices(structure)
+    out = []
+    for (xa, ya), (xb, yb) in zip(v[:-1], v[1:], strict=True):
+        dy = yb - ya
+        if abs(dy) <= 1e-12 * max(1.0, abs(road)):
+            continue
+        t = np.linspace(0.0, 1.0, 9)
+        z = np.clip(road - (ya + t * dy), 0.0, None)
+        p = mobilisation * (kp * unit_weight * z + 2.0 * cohesion * np.sqrt(kp) * width)
+        force = float(np.trapezoid(p, t)) * abs(dy)
+        if force <= 0.0:
+            continue
+        tc = float(np.trapezoid(p * t, t) / np.trapezoid(p, t))
+        point = (float(xa + tc * (xb - xa)), float(ya + tc * dy))
+        out.append((point, (float(np.sign(dy)), 0.0), (0.0, force)))
+    return out

@@ -102,6 +102,7 @@ _CAP_TOL = 1e-9
 _LP_TIME_LIMIT = 30.0
 
 Load = tuple[Sequence[float], Sequence[float]]
+BoundedLoad = tuple[Sequence[float], Sequence[float], Sequence[float]]
 
 
 class LimitStatus(StrEnum):
@@ -207,6 +208,8 @@ class LimitResult:
             coefficient with which the dead load would have an equilibrium (to 0.1 %,
             rounded up); inf if none would (the blocks fail even with no sliding, e.g. an
             arch thinner than its minimum thickness). NaN otherwise.
+        bounded_forces: the magnitude ``F`` [N] chosen for each of the ``bounded_loads``
+            (empty if there are none or the LP is infeasible).
     """
 
     load_factor: float
@@ -219,6 +222,7 @@ class LimitResult:
     fixed: np.ndarray
     dead_load_mechanism: list[Hinge] = field(default_factory=list)
     friction_factor: float = float("nan")
+    bounded_forces: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @property
     def explanation(self) -> str:
@@ -399,6 +403,29 @@ def _parse_loads(loads: Sequence[Load], what: str) -> list[tuple[np.ndarray, np.
     return out
 
 
+def _parse_bounded(loads: Sequence[BoundedLoad]) -> list[tuple[np.ndarray, np.ndarray,
+                                                                tuple[float, float]]]:
+    out = []
+    for item in loads:
+        try:
+            x, d, (lo, hi) = item
+            x = np.asarray(x, dtype=np.float64).reshape(2)
+            d = np.asarray(d, dtype=np.float64).reshape(2)
+            lo, hi = float(lo), float(hi)
+        except (TypeError, ValueError) as err:
+            raise ValueError("each of bounded_loads must be ((x, y), (dx, dy), (F_min, F_max)),"
+                             f" got {item!r}") from err
+        norm = float(np.hypot(*d))
+        if not (np.all(np.isfinite(x)) and np.isfinite(norm) and norm > 0.0):
+            raise ValueError(f"bounded_loads: a finite point and a non-zero direction are "
+                             f"needed, got {item!r}")
+        if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 <= lo <= hi):
+            raise ValueError(f"bounded_loads: the bounds must satisfy 0 <= F_min <= F_max < inf,"
+                             f" got {item!r}")
+        out.append((x, d / norm, (lo, hi)))
+    return out
+
+
 def _block_densities(layout: BlockLayout, density: float | Mapping[str, float]) -> np.ndarray:
     if isinstance(density, Mapping):
         missing = sorted(set(layout.materials) - set(density))
@@ -463,6 +490,7 @@ def limit_analysis(
     live_loads: Sequence[Load] = (),
     dead_loads: Sequence[Load] = (),
     live_acceleration: Sequence[float] | None = None,
+    bounded_loads: Sequence[BoundedLoad] = (),
     friction: float | Callable[[str, str, np.ndarray], float] = 0.6,
     g: float = G,
     max_load_factor: float = 1e6,
@@ -489,6 +517,13 @@ def limit_analysis(
         live_acceleration: ``(a_x, a_y)`` [m/s^2]: adds the body force ``mass · a`` of every
             free block, at its centroid, to the live load (e.g. ``(g, 0)`` makes ``λ`` the
             horizontal acceleration at collapse in units of g, as on a tilting table).
+        bounded_loads: ``((x, y), (d_x, d_y), (F_min, F_max))``: a force ``F d`` at the
+            point whose magnitude the LP chooses within ``F_min <= F <= F_max`` [N] (``d``
+            is normalised): a resistance that is mobilised only as far as needed, such as
+            the passive pressure of a fill on an arch that sways into it (RING's way; see
+            :func:`~masonry_fdem.geometry.fill.fill_passive`). In the mechanism (the dual)
+            each one dissipates ``F_max`` times the speed against ``d`` and does the work
+            ``F_min`` times the speed along it.
         friction: Coulomb coefficient ``μ`` of every interface, ``>= 0`` (``inf``: no
             sliding); or a function ``friction(name_a, name_b, midpoint)`` of the names of
             the two blocks of an interface (``a`` first in the layout) and its midpoint
@@ -523,6 +558,7 @@ def limit_analysis(
     fixed = _fixed_blocks(layout, supports)
     live = _parse_loads(live_loads, "live_loads")
     dead = _parse_loads(dead_loads, "dead_loads")
+    bounded = _parse_bounded(bounded_loads)
     acc = None
     if live_acceleration is not None:
         acc = np.asarray(live_acceleration, dtype=np.float64).reshape(2)
@@ -576,8 +612,18 @@ def limit_analysis(
     mu = _interface_friction(friction, itf, layout.names)
     n_rows = 3 * free.size
     a_dead, col_bounds = _equilibrium_matrix(itf, mu, slot, centroids, size, n_rows)
+    # bounded loads: one column each, in units of scale_dead like the interface forces
+    b_cols = np.zeros((3 * free.size, len(bounded)))
+    b_bounds = []
+    for j, (x, d, (lo, hi)) in enumerate(bounded):
+        col = np.zeros(3 * free.size)
+        _add_point_load(col, slot, centroids, _loaded_block(layout, x, d, eps), x, d)
+        b_cols[:, j] = col * moment_rows
+        b_bounds.append((lo / scale_dead, hi / scale_dead))
+    col_bounds = col_bounds + b_bounds
+    a_dead = hstack([a_dead, csr_matrix(b_cols)], format="csr")
     a_eq = hstack([a_dead, coo_matrix(live_col[:, None])], format="csr")
-    n_var = 4 * n_int + 1
+    n_var = 4 * n_int + len(bounded) + 1
 
     lam_cap = max_load_factor * scale_live / scale_dead
     bounds = col_bounds + [(0.0, lam_cap)]
@@ -602,7 +648,8 @@ def limit_analysis(
             velocities[free] = y.reshape(free.size, 3) * [1.0, 1.0, 1.0 / size]
             velocities /= _fastest_vertex(layout, centroids, velocities, free) or 1.0
             mechanism = _mechanism(itf, centroids, velocities, names)
-        factor = _friction_factor(itf, mu, slot, centroids, size, n_rows, b_eq)
+        factor = _friction_factor(itf, mu, slot, centroids, size, n_rows, b_eq,
+                                  extra=(csr_matrix(b_cols), b_bounds))
         log.debug("limit analysis: infeasible; %d interfaces move in the dead-load mechanism,"
                   " friction factor needed %.4g (%.3g s)", len(mechanism), factor,
                   time.perf_counter() - t0)
@@ -613,7 +660,8 @@ def limit_analysis(
         raise RuntimeError(f"limit analysis LP failed: {res.message}")
 
     lam = float(res.x[-1]) * scale_dead / scale_live
-    x = res.x[:-1].reshape(n_int, 2, 2) * scale_dead  # (interface, end, column)
+    bounded_forces = res.x[4 * n_int:-1] * scale_dead
+    x = res.x[:4 * n_int].reshape(n_int, 2, 2) * scale_dead  # (interface, end, column)
     # finite μ: (f+, f-) -> (N, S) = (f+ + f-, μ (f+ - f-)); μ = inf: the columns are (N, S)
     finite = np.isfinite(mu)
     cone = np.stack([x[..., 0] + x[..., 1],
@@ -622,7 +670,7 @@ def limit_analysis(
     forces = x.reshape(n_int, 4)
     if res.x[-1] >= lam_cap * (1.0 - _CAP_TOL):
         return LimitResult(max_load_factor, LimitStatus.NO_MECHANISM, forces, [], velocities,
-                           itf, names, fixed)
+                           itf, names, fixed, bounded_forces=bounded_forces)
 
     y = np.asarray(res.eqlin.marginals, dtype=np.float64).reshape(free.size, 3)
     velocities[free] = y * [1.0, 1.0, 1.0 / size]
@@ -632,7 +680,8 @@ def limit_analysis(
     if speed > 0.0:
         velocities /= speed
     hinges = _mechanism(itf, centroids, velocities, names)
-    return LimitResult(lam, LimitStatus.COLLAPSE, forces, hinges, velocities, itf, names, fixed)
+    return LimitResult(lam, LimitStatus.COLLAPSE, forces, hinges, velocities, itf, names, fixed,
+                       bounded_forces=bounded_forces)
 
 
 def _equilibrium_matrix(itf: Interfaces, mu: np.ndarray, slot: np.ndarray,
@@ -715,16 +764,20 @@ def _dead_load_mechanism(a: csr_matrix, b: np.ndarray, bounds: list) -> np.ndarr
 
 def _friction_factor(itf: Interfaces, mu: np.ndarray, slot: np.ndarray,
                      centroids: np.ndarray, size: float, n_rows: int, b: np.ndarray,
-                     rtol: float = 1e-3) -> float:
+                     rtol: float = 1e-3,
+                     extra: tuple[csr_matrix, list] | None = None) -> float:
     """The least factor on every interface's friction coefficient with which the dead load
     has an equilibrium (to ``rtol``, rounded up); inf if none has (not even with no
     sliding anywhere). Equilibrium exists for every larger factor: the friction cones
     grow with it. The factor returned is one at which an equilibrium was found: an LP
-    that no method decides counts as infeasible."""
+    that no method decides counts as infeasible. ``extra``: more columns (the bounded
+    loads) and their bounds, unchanged by the factor."""
 
     def stands(factor: float) -> bool:
         scaled = np.where(mu > 0.0, mu * factor, 0.0)
         a, bounds = _equilibrium_matrix(itf, scaled, slot, centroids, size, n_rows)
+        if extra is not None and extra[0].shape[1]:
+            a, bounds = hstack([a, extra[0]], format="csr"), bounds + list(extra[1])
         # close to the critical factor the LPs are nearly degenerate: interior point first
         res = _solve(np.zeros(a.shape[1]), ("highs-ipm", "highs"), A_eq=a, b_eq=b,
                      bounds=bounds)
