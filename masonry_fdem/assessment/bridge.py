@@ -1,0 +1,356 @@
+"""A bridge of :class:`~masonry_fdem.geometry.bridge.Bridge` as an FDEM model, and a
+vehicle driven onto it to collapse.
+
+The masonry (voussoirs, piers, abutments, end walls) is deformable blocks in plane stress
+with mortar joints between voussoirs and on the skewbacks; the fill, the surfacing and the
+soil are Mohr–Coulomb (or elastic) continua in plane strain; every interface between the
+fill (or surfacing, soil) and another body is friction-only and opens freely. The
+vehicle's axles bear on the road through guided steel loading beams (one per axle,
+``patch`` wide). Self-weight first (Newton, with the fill's interfaces held stuck while it
+takes its weight, then released), then the axle loads in proportion, under arc-length
+control of their mean vertical displacement, past the peak. Units: SI.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+from mpi4py import MPI
+
+import numpy as np
+
+from masonry_fdem.constants import G
+from masonry_fdem.geometry.bridge import Bridge, BridgeError
+from masonry_fdem.geometry.layout import BlockLayout
+from masonry_fdem.interactions.joints import JointMaterial
+from masonry_fdem.materials.elastic import Material
+from masonry_fdem.solvers.status import RunStatus, Status
+
+__all__ = ["BridgeRun", "Vehicle", "bridge_model", "load_bridge"]
+
+#: the loading beam under each axle: steel, 0.05 m thick
+BEAM = (0.05, Material(density=7850.0, E=210e9, nu=0.3))
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """Axles of a vehicle: ``offsets`` [m] from its reference point (the first axle at
+    0, the others behind it at negative offsets, or ahead), ``loads`` their relative
+    weights (the collapse load is their sum), ``patch`` [m] the tyre contact length along
+    the road of every axle."""
+
+    offsets: tuple[float, ...] = (0.0,)
+    loads: tuple[float, ...] = (1.0,)
+    patch: float = 0.3
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "offsets", tuple(float(x) for x in self.offsets))
+        object.__setattr__(self, "loads", tuple(float(x) for x in self.loads))
+        if not self.offsets or len(self.offsets) != len(self.loads):
+            raise BridgeError(f"vehicle: one load per axle offset, got {len(self.offsets)} "
+                              f"offsets and {len(self.loads)} loads")
+        if not all(math.isfinite(w) and w > 0 for w in self.loads):
+            raise BridgeError(f"vehicle: axle loads must be > 0, got {self.loads}")
+        if not (math.isfinite(self.patch) and self.patch > 0):
+            raise BridgeError(f"vehicle: patch must be > 0 m, got {self.patch}")
+        xs = sorted(self.offsets)
+        if any(b - a < self.patch for a, b in zip(xs[:-1], xs[1:], strict=True)):
+            raise BridgeError(f"vehicle: axles {self.offsets} closer than the patch "
+                              f"{self.patch} m overlap")
+
+    def axles(self, x: float) -> list[tuple[float, float]]:
+        """``(x, share)`` of each axle with the vehicle at ``x`` [m] (shares sum to 1)."""
+        total = sum(self.loads)
+        return [(x + o, w / total) for o, w in zip(self.offsets, self.loads, strict=True)]
+
+
+def _layout(bridge: Bridge, vehicle: Vehicle, x: float) -> tuple[BlockLayout, list]:
+    half = 0.5 * vehicle.patch
+    axles = vehicle.axles(x)
+    for k, (xa, _) in enumerate(axles):
+        bridge.check_on_deck(xa, half, f"axle {k} of the vehicle")
+    road = bridge.road_level()
+    lay = bridge.layout(road_points=[v for xa, _ in axles for v in (xa - half, xa + half)])
+    t = BEAM[0]
+    beams = [np.array([[xa - half, road], [xa + half, road], [xa + half, road + t],
+                       [xa, road + t], [xa - half, road + t]]) for xa, _ in axles]
+    names = tuple(f"beam:{k}" for k in range(len(axles)))
+    return lay + BlockLayout(tuple(beams), ("beam",) * len(beams), names), axles
+
+
+def bridge_model(
+    bridge: Bridge,
+    materials: Mapping[str, Material],
+    mortar: JointMaterial,
+    interface: JointMaterial,
+    vehicle: Vehicle,
+    x: float,
+    *,
+    mesh_size: float | Mapping[str, float] = 0.2,
+    penalty_factor: float | None = None,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+):
+    """The FDEM model of ``bridge`` with ``vehicle`` at ``x`` (collective).
+
+    Args:
+        bridge: the geometry.
+        materials: :class:`~masonry_fdem.materials.Material` per name of
+            ``bridge.materials`` (fill and soil usually
+            :class:`~masonry_fdem.materials.MohrCoulomb`).
+        mortar: the joints between voussoirs and on the skewbacks.
+        interface: the friction-only interface of the fill, surfacing and soil with every
+            other body (needs explicit ``kn``, ``ks``).
+        vehicle: its axles; ``x`` [m] where its reference point stands.
+        mesh_size: element size [m], one value or per part name ("masonry", "pier",
+            "fill", "surfacing", "soil", "wall").
+        penalty_factor: contact penalty factor (default: the contact's own).
+
+    Returns:
+        ``(model, [contact, joints], axles)``: ``axles`` the ``(x, share)`` per axle.
+    """
+    from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
+    from masonry_fdem.model import Model
+
+    m = bridge.materials
+    mats = dict(materials)
+    needed = {m["masonry"], m["pier"], m["wall"], m["fill"]}
+    if bridge.surfacing > 0:
+        needed.add(m["surfacing"])
+    if bridge.soil_depth > 0:
+        needed.add(m["soil"])
+    missing = sorted(needed - set(mats))
+    if missing:
+        raise BridgeError(f"no material given for {missing}")
+    if interface.kn is None or interface.ks is None:
+        raise BridgeError("the fill's interface needs explicit kn and ks")
+    mats["beam"] = BEAM[1]
+    lay, axles = _layout(bridge, vehicle, x)
+    part = {v: k for k, v in m.items()}
+    if isinstance(mesh_size, Mapping):
+        sizes = [float(mesh_size.get("beam" if n.startswith("beam:") else
+                                     part.get(mat, "masonry"), 0.2)) for n, mat in
+                 zip(lay.names, lay.materials, strict=True)]
+    else:
+        sizes = [float(mesh_size)] * len(lay)
+    sizes = [0.5 * BEAM[0] if n.startswith("beam:") else s
+             for n, s in zip(lay.names, sizes, strict=True)]
+    mesh = lay.mesh(sizes, comm)
+    continua = {m["fill"], m["surfacing"], m["soil"]}
+    hyp = {name: "plane_strain" for name in continua if name in lay.materials}
+    model = Model(mesh, mats, hypotheses=hyp, width=bridge.width, comm=comm)
+    model.fix_blocks("wall:*", name="walls")
+    if bridge.soil_depth > 0:
+        lo, hi = bridge.soil_extent
+        yd = bridge.foundation_level - bridge.soil_depth
+        tol = 1e-6 * (hi - lo)
+        model.fix(lambda X: np.isclose(X[1], yd, atol=tol), name="soil base")
+        model.fix(lambda X: (np.isclose(X[0], lo, atol=tol) | np.isclose(X[0], hi, atol=tol))
+                  & (X[1] < bridge.foundation_level - tol), components=(0,),
+                  name="soil sides")
+    rigid = [n for n in bridge.foundations() if not bridge.on_soil(n)]
+    if rigid:
+        model.fix_blocks(rigid, name="foundations")
+    for k in range(len(axles)):
+        model.prescribe_velocity(f"beam:{k}", (0.0, None), name=f"beam guide {k}")
+    model.add_gravity()
+    friction = {}
+    table: dict[tuple[str, str], JointMaterial | None] = {
+        (m["masonry"], m["masonry"]): mortar, (m["masonry"], m["pier"]): mortar,
+        # the end walls against the abutments: dry contact
+        (m["pier"], m["pier"]): None, (m["pier"], m["wall"]): None}
+    others = set(lay.materials)
+    soft = [n for n in (m["fill"], m["surfacing"], m["soil"]) if n in others]
+    for s in soft:
+        for o in others:
+            if o != s:
+                table[tuple(sorted((s, o)))] = interface
+    # the bonded interfaces: the piers and abutments on the soil, the surfacing on the fill
+    bonds = {}
+    if m["soil"] in others:
+        bonds[m["soil"]] = [m["pier"]]
+    if m["surfacing"] in others:
+        bonds[m["fill"]] = [m["surfacing"]]
+        # the loading beams bedded on the road; the road's ends on the end walls' tops
+        bonds[m["surfacing"]] = ["beam", m["wall"]]
+    else:
+        bonds[m["fill"]] = ["beam"]
+    for weak, parts in bonds.items():
+        jm = adhesive_interface(interface, mats[weak])
+        for o in parts:
+            table[tuple(sorted((weak, o)))] = jm
+    for pair, jm in table.items():
+        if jm is not None and pair not in {(m["masonry"], m["masonry"]),
+                                           (m["masonry"], m["pier"])}:
+            friction[pair] = jm.tan_phi
+    contact = BlockContact(model, ContactSettings(
+        friction=mortar.tan_phi, friction_table=friction,
+        **({} if penalty_factor is None else {"penalty_factor": penalty_factor})))
+
+    def bond(jm):
+        return jm if jm is not None and (jm.bonded or jm.kn is not None) else None
+
+    joints = Joints(model, {k: bond(v) for k, v in table.items()}, contact=contact)
+    return model, [contact, joints], axles
+
+
+def adhesive_interface(interface: JointMaterial, weaker: Material) -> JointMaterial:
+    """The interface of a foundation on the soil, or of the surfacing on the fill: the
+    friction-only ``interface`` with an adhesion of the weaker body's cohesion c [Pa] (a
+    tensile strength and a cohesion c, softening over 1 mm in tension and 10 mm in shear;
+    c = 1 kPa for a cohesionless or elastic body). Besides being what a buried foundation
+    or a laid road base has, it gives the interface a stiffness at zero stress, which
+    Newton needs from the unloaded state: a body held only by friction-only interfaces has
+    none there, as they sit at their kink between open and closed."""
+    from dataclasses import replace
+
+    c = float(getattr(weaker, "c", 0.0)) or 1e3
+    return replace(interface, ft=c, GfI=c * 1e-3, c=c, GfII=c * 1e-2)
+
+
+@dataclass
+class BridgeRun:
+    """Result of :func:`load_bridge`: ``status`` (peak passed, not converged, ...),
+    ``loads`` [N] (the vehicle's total) against ``displacements`` [m] (the axles' mean
+    settlement under the live load), ``peak`` [N], ``sigma_yy`` per cell [Pa] (gathered
+    on rank 0, over the BlockMesh cells), the displacement (local dofs) and the support
+    reactions ``(R_x, R_y)`` [N] per prescription at the peak, ``seconds``."""
+
+    status: RunStatus
+    loads: list[float] = field(default_factory=list)
+    displacements: list[float] = field(default_factory=list)
+    sigma_yy: np.ndarray | None = None
+    u_peak: np.ndarray | None = None
+    reactions: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+    @property
+    def peak(self) -> float:
+        return float(max(self.loads, default=0.0))
+
+    @property
+    def collapsed(self) -> bool:
+        return self.status.status is Status.PEAK_PASSED
+
+    def line(self) -> str:
+        """The outcome in words, with the load in kN and tonnes."""
+        t = self.peak / (1000.0 * G)
+        if self.collapsed:
+            return f"peak passed — collapse load {self.peak / 1e3:.1f} kN ({t:.2f} t)"
+        return (f"{self.status.status.value} — carried {self.peak / 1e3:.1f} kN ({t:.2f} t), a "
+                f"lower bound of the collapse load ({self.status.detail})")
+
+
+def load_bridge(
+    model,
+    interactions: list,
+    axles: Sequence[tuple[float, float]],
+    interface: JointMaterial,
+    road: float,
+    *,
+    increment: float = 2e-4,
+    max_displacement: float = 0.1,
+    max_steps: int = 300,
+    stop_drop: float = 0.2,
+    grow: float = 1.5,
+    rtol: float = 1e-6,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+) -> BridgeRun:
+    """Self-weight, then the axle loads to collapse (collective).
+
+    Args:
+        model, interactions, axles: from :func:`bridge_model`.
+        interface: the fill's interface (held stuck while the fill settles).
+        road: y [m] of the road (the loads act on the beams' tops).
+        increment: first arc-length increment of the axles' mean settlement [m].
+        max_displacement: stop there [m] (status "displacement limit").
+        max_steps: at most this many increments.
+        stop_drop: stop once the load has fallen this fraction below its peak (the peak
+            is then proven passed; see :meth:`StaticSolver.follow`).
+        grow: an increment that converges easily lets the next grow this many times
+            (1: a fixed increment, the same path whatever the iteration counts).
+        rtol: Newton's tolerance on the forces.
+    """
+    from masonry_fdem.solvers.static import StaticSolver
+
+    t0 = time.perf_counter()
+    joints = interactions[1]
+    solver = StaticSolver(model, interactions=interactions, rtol=rtol)
+    mu = interface.tan_phi
+    f = max(10.0, 4.0 * mu)
+    joints.set_friction(interface, f)
+    st = solver.settle()
+    if st.status is not Status.LOAD_REACHED:
+        # Newton from the unloaded state, where the bodies only touch, can cycle (the
+        # friction-only interfaces sit at their kink): dynamic relaxation settles the
+        # bridge, Newton goes on from its state (as the arch assessment does)
+        from masonry_fdem.solvers import DynamicRelaxation
+
+        DynamicRelaxation(model, interactions=interactions, rtol=1e-5, ke_tol=math.inf,
+                          max_iter=50_000, damping="velocity").solve(0.0)
+        solver.dead_factor = 1.0
+        solver.commit()
+        r0 = solver.solve(0.0)
+        st = (RunStatus(Status.LOAD_REACHED, 0.0, 0.0, None, "dead loads applied (dynamic "
+                        "relaxation, then Newton)") if r0.converged else
+              RunStatus(Status.NOT_CONVERGED, 0.0, 0.0, 0.0,
+                        f"dynamic relaxation, then Newton: {r0.reason}"))
+    while st.status is Status.LOAD_REACHED and f > mu:
+        f = max(mu, 0.5 * f)
+        joints.set_friction(interface, f)
+        r = solver.solve(solver.load_factor)
+        if not r.converged:
+            st = RunStatus(Status.NOT_CONVERGED, 0.0, 0.0, 0.0,
+                           f"self-weight: the fill's interfaces released to tan δ = {f:.3g}: "
+                           f"Newton did not converge ({r.reason})")
+    if st.status is not Status.LOAD_REACHED:
+        return BridgeRun(replace_detail(st, "self-weight: " + st.detail),
+                         seconds=time.perf_counter() - t0)
+    solver.commit()
+    for k, (x, share) in enumerate(axles):
+        model.add_point_load((x, road + BEAM[0]), (0.0, -share), blocks=f"beam:{k}")
+    nodes = [model.nearest_node((x, road + BEAM[0]), f"beam:{k}") for k, (x, _) in
+             enumerate(axles)]
+    shares = [s for _, s in axles]
+    u0 = _mean_uy(model, nodes, shares, comm)
+    run = BridgeRun(st)
+    best = {"load": -math.inf}
+
+    def on_point(p) -> None:
+        run.loads.append(float(p.load))
+        run.displacements.append(u0 - _mean_uy(model, nodes, shares, comm))
+        if p.load > best["load"]:
+            best["load"] = p.load
+            model.update_stress()
+            n = model.dmesh.cell_input.size
+            syy = model.stress.x.array.reshape(-1, 4)[:n, 3].copy()
+            parts = comm.gather((model.dmesh.cell_input, syy), root=0)
+            if comm.rank == 0:
+                cells = np.zeros(model.blocks.n_cells)
+                for idx, vals in parts:
+                    cells[idx] = vals
+                run.sigma_yy = cells
+            run.u_peak = model.u.x.array.copy()
+            run.reactions = {k: v.copy() for k, v in solver.reactions().items()}
+
+    res = solver.follow(increment, max_displacement=max_displacement, max_steps=max_steps,
+                        peak_drop=min(0.05, stop_drop), stop_drop=stop_drop, grow=grow,
+                        min_increment=increment / 1024.0, callback=on_point)
+    run.status = res.status
+    run.seconds = time.perf_counter() - t0
+    return run
+
+
+def replace_detail(st: RunStatus, detail: str) -> RunStatus:
+    from dataclasses import replace
+
+    return replace(st, detail=detail)
+
+
+def _mean_uy(model, nodes: Sequence[int], shares: Sequence[float], comm) -> float:
+    """Share-weighted mean vertical displacement [m] of the nodes (-1: another rank's)."""
+    u = model.u.x.array.reshape(-1, 2)
+    local = sum(s * float(u[n, 1]) for n, s in zip(nodes, shares, strict=True) if n >= 0)
+    return comm.allreduce(local, op=MPI.SUM)

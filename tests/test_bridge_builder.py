@@ -1,0 +1,165 @@
+"""The bridge builder (:mod:`masonry_fdem.geometry.bridge`): spans on piers and abutments,
+fill, surfacing, end walls, soil; bad bridge input named; and a small two-span bridge
+with soil under its pier loaded to collapse by a two-axle vehicle, the same on any number
+of ranks."""
+
+from __future__ import annotations
+
+import math
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+from masonry_fdem.assessment.bridge import Vehicle, bridge_model, load_bridge
+from masonry_fdem.geometry.bridge import Bridge, BridgeError, Span
+from masonry_fdem.geometry.fill import upper_envelope
+from masonry_fdem.geometry.polygons import polygon_area
+from masonry_fdem.interactions.joints import JointMaterial
+from masonry_fdem.materials import MohrCoulomb
+from masonry_fdem.materials.elastic import Material
+from masonry_fdem.solvers.limit_analysis import find_interfaces
+
+SPAN = Span(2.0, 0.5, 0.15, 12)
+
+
+def two_span(**kw) -> Bridge:
+    args = dict(spans=(SPAN, SPAN), piers=(0.5,), pier_height=0.5, abutment_width=0.4,
+                cover=0.3, surfacing=0.05)
+    args.update(kw)
+    return Bridge(**args)
+
+
+def test_two_spans_on_a_pier_under_fill_and_surfacing():
+    b = two_span(soil_depth=0.6, soil_extent=(1.5, 3.0))
+    lay = b.layout(road_points=(1.0, 1.2))
+    names = set(lay.names)
+    assert {"abutment:left", "pier:0", "abutment:right", "fill", "surfacing", "wall:left",
+            "wall:right", "soil"} <= names
+    assert sum(n.startswith("voussoir:") for n in names) == 2 * 12
+    assert b.springings() == [(0.0, 2.0), (2.5, 4.5)]
+    assert b.deck() == (-0.4, 4.9)
+    # the road: the cover over the crowns' extrados (both at rise + ring thickness)
+    assert b.crown_height() == pytest.approx(0.5 + 0.15, abs=1e-12)
+    assert b.road_level() == pytest.approx(0.65 + 0.3, abs=1e-12)
+    # the pier: 0.5 m wide at its base, on the foundation level; it carries both spans'
+    # springing joints, each as long as the ring is thick
+    pier = lay.polygons[lay.names.index("pier:0")]
+    assert pier[:, 1].min() == pytest.approx(-0.5) and np.ptp(pier[pier[:, 1] < -0.49, 0]) \
+        == pytest.approx(0.5)
+    itf = find_interfaces(lay)
+    k = lay.names.index("pier:0")
+    on_pier = [i for i in range(itf.size) if k in (itf.block_a[i], itf.block_b[i])
+               and lay.names[itf.block_a[i] + itf.block_b[i] - k].startswith("voussoir:")]
+    lengths = np.linalg.norm(itf.end[on_pier] - itf.start[on_pier], axis=1)
+    assert sorted(lengths) == pytest.approx([0.15, 0.15], rel=1e-9)
+    # the fill lies on the extrados and the pier's top; the surfacing on the fill
+    fill = lay.polygons[lay.names.index("fill")]
+    xs = np.linspace(-0.4, 4.9, 20001)
+    bottom = upper_envelope(b.structure(), xs)
+    top = b.road_level() - 0.05
+    assert np.all(upper_envelope(lay, xs, "fill") <= top + 1e-12)
+    column = np.trapezoid(top - bottom, xs)
+    assert polygon_area(fill) == pytest.approx(column, rel=1e-4)
+    surf = lay.polygons[lay.names.index("surfacing")]
+    assert polygon_area(surf) == pytest.approx(0.05 * (5.3 + 2 * 0.3), rel=1e-12)
+    # the soil under the pier only: the pier stands on it, the abutments on rigid ground
+    assert b.on_soil("pier:0") and not b.on_soil("abutment:left")
+    soil = lay.polygons[lay.names.index("soil")]
+    assert polygon_area(soil) == pytest.approx(1.5 * 0.6, rel=1e-12)
+    # its top has the corners of the pier's base, so the meshes meet there
+    for x in (2.0, 2.5):
+        assert np.any(np.isclose(soil[:, 0], x) & np.isclose(soil[:, 1], -0.5))
+
+
+@pytest.mark.parametrize("kw, expected", [
+    (dict(spans=(), piers=()), "above no arch"),
+    (dict(piers=()), "need 1 pier"),
+    (dict(piers=(0.1,)), "overlap above pier 0"),
+    (dict(piers=(-0.5,)), "pier 0 width must be > 0"),
+    (dict(soil_depth=0.6, soil_extent=(2.2, 4.0)), "pier:0 stands partly off the foundation"),
+    (dict(soil_depth=0.6, soil_extent=(2.6, 4.0)), "no pier or abutment stands on the soil"),
+    (dict(soil_depth=0.6, soil_extent=(3.0, 2.0)), "x_max > x_min"),
+    (dict(surfacing=0.3), "thinner than the cover"),
+    (dict(cover=0.0), "cover must be > 0"),
+    (dict(spans=(SPAN, Span(2.0, 1.5, 0.15, 12))), "span 1: "),
+    (dict(abutment_width=0.05), "narrower than span 0's springing joint"),
+    (dict(materials={"masonry": "m"}), "materials: no name for"),
+])
+def test_bad_bridge_input_is_named(kw, expected):
+    with pytest.raises(BridgeError) as info:
+        two_span(**kw)
+    assert expected in str(info.value)
+
+
+def test_bad_vehicle_and_road_points_are_named():
+    b = two_span()
+    with pytest.raises(BridgeError, match="axle 1 of the vehicle at x = -0.7 m .* off the deck"):
+        bridge_model(b, MATS, MORTAR, ITF, Vehicle((0.0, -1.0), (1.0, 1.0), 0.2), 0.3,
+                     comm=MPI.COMM_SELF)
+    with pytest.raises(BridgeError, match="off the deck"):
+        b.layout(road_points=(5.5,))
+    with pytest.raises(BridgeError, match="overlap"):
+        Vehicle((0.0, 0.1), (1.0, 1.0), 0.3)
+    with pytest.raises(BridgeError, match="one load per axle"):
+        Vehicle((0.0, 1.0), (1.0,))
+    with pytest.raises(BridgeError, match="no material given for \\['soil'\\]"):
+        bridge_model(two_span(soil_depth=0.5), {k: v for k, v in MATS.items() if k != "soil"},
+                     MORTAR, ITF, Vehicle(), 1.0, comm=MPI.COMM_SELF)
+
+
+MATS = {"masonry": Material(2000.0, 5e9, 0.2), "pier": Material(2200.0, 10e9, 0.2),
+        "fill": MohrCoulomb(density=1900.0, E=30e6, nu=0.3, c=2e3, phi=35.0),
+        "surfacing": MohrCoulomb(density=2300.0, E=1e9, nu=0.3, c=100e3, phi=35.0),
+        "soil": MohrCoulomb(density=1900.0, E=50e6, nu=0.3, c=10e3, phi=30.0)}
+MORTAR = JointMaterial(kn=5e10, ks=2e10, tan_phi=0.6)
+ITF = JointMaterial(kn=6e9, ks=6e9 / 2.6, tan_phi=math.tan(math.radians(2 / 3 * 35.0)))
+SIZES = {"masonry": 0.15, "pier": 0.15, "fill": 0.15, "surfacing": 0.05, "soil": 0.25,
+         "wall": 0.3}
+
+
+def _run(bridge, x, comm, vehicle=Vehicle(patch=0.2)):
+    model, inter, axles = bridge_model(bridge, MATS, MORTAR, ITF, vehicle, x,
+                                       mesh_size=SIZES, comm=comm)
+    # a fixed increment (the path then does not hang on the Newton iteration counts, which
+    # round-off may change by one); stop once the load has fallen 5 % below its peak
+    return load_bridge(model, inter, axles, ITF, bridge.road_level(), increment=1e-3,
+                       max_displacement=0.04, stop_drop=0.05, grow=1.0, comm=comm)
+
+
+def test_two_span_bridge_on_soil_collapses_under_a_two_axle_vehicle():
+    """A two-span bridge, soil under its pier, surfacing, a two-axle vehicle over the
+    first span: it passes a peak, and at the peak the supports carry the bridge's weight
+    and the vehicle (global equilibrium, to Newton's tolerance)."""
+    b = two_span(soil_depth=0.6, soil_extent=(1.5, 3.0))
+    veh = Vehicle((0.0, -0.6), (1.0, 1.0), 0.2)
+    model, inter, axles = bridge_model(b, MATS, MORTAR, ITF, veh, 1.3, mesh_size=SIZES)
+    assert [x for x, _ in axles] == pytest.approx([1.3, 0.7]) and [s for _, s in axles] == [0.5, 0.5]
+    run = load_bridge(model, inter, axles, ITF, b.road_level(), increment=5e-4,
+                      max_displacement=0.03)
+    weight = model.total_mass() * 9.81  # every block, the fixed ones too
+    ry = sum(r[1] for r in run.reactions.values())
+    print(f"\ntwo spans on soil, vehicle over span 0: {run.line()}; reactions "
+          f"{ry / 1e3:.3f} kN against weight + load {(weight + run.peak) / 1e3:.3f} kN "
+          f"({run.seconds:.0f} s)")
+    assert run.collapsed, run.status
+    assert run.peak > 10e3
+    # (Newton's tolerance bounds the residual's norm, 1e-6 of the forces'; summed over
+    # the ~10⁴ dofs the unbalanced force may reach ~1e-4 of the total)
+    assert ry == pytest.approx(weight + run.peak, rel=5e-4)
+    assert {"soil base", "soil sides", "foundations", "walls"} <= set(run.reactions)
+
+
+def test_two_span_bridge_same_on_any_number_of_ranks():
+    if MPI.COMM_WORLD.size == 1:
+        pytest.skip("compares ranks: run under mpirun -n 2")
+    b = two_span(surfacing=0.0)
+    world = _run(b, 1.3, MPI.COMM_WORLD)
+    one = _run(b, 1.3, MPI.COMM_SELF)
+    k = int(np.argmax(one.loads)) + 1
+    dl = np.abs(np.subtract(world.loads[:k], one.loads[:k])).max() / one.peak
+    print(f"\ntwo spans, {MPI.COMM_WORLD.size} ranks vs 1: {world.peak:.9g} vs {one.peak:.9g} N;"
+          f" curve to the peak {dl:.1e}")
+    assert world.status.status is one.status.status
+    assert abs(world.peak / one.peak - 1.0) < 1e-8 and dl < 1e-8
