@@ -13,6 +13,10 @@ Calls a solver makes, and when:
   dynamic-relaxation update in DR);
 * ``stable_omega2()`` — once, at set-up: its bound of ω² [1/s²] per dof set, added to
   the set's own bound in the stable time step ``2/ω_max``;
+* ``stable_damping()`` — once, at set-up: its bound of the rate γ [1/s] of its viscous
+  dampers per dof set (the largest eigenvalue of M⁻¹C; default none), added over the
+  interactions; the explicit step with the velocity of the half step before is stable
+  for ``dt ≤ 4/(√(4ω² + γ²) + γ)`` = ``(2/ω)(√(1 + ζ²) − ζ)`` with ζ = γ/(2ω);
 * ``add_rowsum(rows)`` — once, at set-up: Σ_j |K_ij| [N/m] of its springs into the row
   sums of each dof set (dynamic relaxation's fictitious masses);
 * ``update(state)`` then ``add_forces(state)`` — at every force evaluation (an explicit
@@ -214,6 +218,11 @@ class Interaction(ABC):
     @abstractmethod
     def stable_omega2(self) -> dict[str, float]:
         """Bound of ω² [1/s²] this interaction adds, per dof-set name (collective)."""
+
+    def stable_damping(self) -> dict[str, float]:
+        """Bound of the rate γ [1/s] of its viscous dampers per dof-set name (the largest
+        eigenvalue of M⁻¹C; collective). None by default."""
+        return {}
 
     def add_rowsum(self, rows: Mapping[str, np.ndarray]) -> None:  # noqa: B027
         """Add Σ_j |K_ij| [N/m] of its springs to ``rows[name]`` of each dof set."""

@@ -674,6 +674,17 @@ class Model:
         )
         return omega2, rowsum
 
+    def stable_omega2(self) -> float:
+        """Bound of ω_max² [1/s²] of the elements (largest element eigenvalue of the
+        linear stiffness with lumped mass; collective). Elements whose nodes are all
+        fully prescribed (a fixed base, a platen) do not count: their motion is given,
+        not integrated."""
+        omega2, _ = self.element_bounds()
+        mask, _ = self.prescribed_arrays(0.0)
+        node_fixed = (mask[0::2] == 1) & (mask[1::2] == 1)
+        omega2[np.all(node_fixed[self.cell_nodes], axis=1)] = 0.0
+        return self.comm.allreduce(float(omega2.max()) if omega2.size else 0.0, op=MPI.MAX)
+
     def stable_time_step(self, extra_omega2: float = 0.0) -> float:
         """Critical explicit time step 2/ω_max [s] of the undamped blocks (collective).
 
@@ -682,12 +693,7 @@ class Model:
         Elements whose nodes are all fully prescribed (a fixed base, a platen) do not
         limit the step: their motion is given, not integrated.
         """
-        omega2, _ = self.element_bounds()
-        mask, _ = self.prescribed_arrays(0.0)
-        node_fixed = (mask[0::2] == 1) & (mask[1::2] == 1)
-        omega2[np.all(node_fixed[self.cell_nodes], axis=1)] = 0.0
-        w2 = self.comm.allreduce(float(omega2.max()) if omega2.size else 0.0, op=MPI.MAX)
-        total = w2 + extra_omega2
+        total = self.stable_omega2() + extra_omega2
         return 2.0 / np.sqrt(total) if total > 0 else np.inf
 
     # ------------------------------------------------------------------ results

@@ -5,9 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 
+import numpy as np
+
 from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction
 
-__all__ = ["as_interactions", "owned_dofsets", "prescribe_displacements", "summed_omega2"]
+__all__ = ["as_interactions", "damped_step", "owned_dofsets", "prescribe_displacements",
+           "stability_terms"]
 
 
 def as_interactions(interactions: Interaction | Iterable[Interaction] | None
@@ -36,20 +39,36 @@ def owned_dofsets(interactions: list[Interaction]) -> dict[str, DofSet]:
     return sets
 
 
-def summed_omega2(interactions: list[Interaction], names: Iterable[str]) -> dict[str, float]:
-    """Σ over the interactions of their ω² bounds [1/s²], per dof-set name."""
+def stability_terms(interactions: list[Interaction], names: Iterable[str],
+                    labels: list[str]) -> tuple[dict[str, dict[str, float]],
+                                                dict[str, dict[str, float]]]:
+    """Per dof-set name, each interaction's ω² bound [1/s²] and damper rate bound γ [1/s]
+    by its label (only the non-zero ones; collective)."""
     known = {BLOCKS, *names}
-    w2 = dict.fromkeys(known, 0.0)
-    for c in interactions:
-        for name, value in c.stable_omega2().items():
-            if name not in known:
-                raise ValueError(f"{type(c).__name__} bounds a dof set {name!r} that no "
-                                 f"interaction brings (have {sorted(known)})")
-            if not value >= 0:
-                raise ValueError(f"{type(c).__name__}: ω² bound of {name!r} must be >= 0, "
-                                 f"got {value}")
-            w2[name] += float(value)
-    return w2
+    w2: dict[str, dict[str, float]] = {n: {} for n in known}
+    gamma: dict[str, dict[str, float]] = {n: {} for n in known}
+    for c, label in zip(interactions, labels, strict=True):
+        for kind, terms, bounds in (("ω²", w2, c.stable_omega2()),
+                                    ("damper rate", gamma, c.stable_damping())):
+            for name, value in bounds.items():
+                if name not in known:
+                    raise ValueError(f"{type(c).__name__} bounds a dof set {name!r} that no "
+                                     f"interaction brings (have {sorted(known)})")
+                if not value >= 0:
+                    raise ValueError(f"{type(c).__name__}: {kind} bound of {name!r} must "
+                                     f"be >= 0, got {value}")
+                if value > 0:
+                    terms[name][label] = float(value)
+    return w2, gamma
+
+
+def damped_step(omega2: float, gamma: float) -> float:
+    """Critical step [s] of central differences with a damper on the velocity of the half
+    step before: 4/(√(4ω² + γ²) + γ) = (2/ω)(√(1 + ζ²) − ζ), ζ = γ/(2ω) (ω² [1/s²], γ
+    [1/s]); 2/ω without dampers, 2/γ without springs, ∞ with neither."""
+    if omega2 <= 0.0 and gamma <= 0.0:
+        return float("inf")
+    return 4.0 / (np.sqrt(4.0 * omega2 + gamma * gamma) + gamma)
 
 
 def prescribe_displacements(model, sets, displacement: Mapping[str, Sequence[float | None]]

@@ -7,10 +7,14 @@ rotations, anchor bar nodes — updates velocities and displacements, overwrites
 prescribed dofs, computes support reactions and accumulates the energy account. Nothing
 is allocated in the step.
 
-The time step is ``safety · 2/ω_max``, ω_max bounded for the blocks by the largest
-element eigenvalue of the linear stiffness with lumped mass plus the bounds the
-interactions add, and for every other dof set by the bounds of the interactions acting
-on it; it is reported, and a user time step above the critical one is refused.
+The time step is ``safety`` times the critical one, the smallest over the dof sets of
+``(2/ω)(√(1 + ζ²) − ζ)`` = ``4/(√(4ω² + γ²) + γ)``: ω² bounded for the blocks by the
+largest element eigenvalue of the linear stiffness with lumped mass plus the bounds the
+interactions add (contact penalties, joints, anchors, disks), for every other dof set by
+the bounds of the interactions acting on it, and γ = 2ζω the sum of the interactions'
+bounds of their dampers' rates (the restitution of the block contact), which act on the
+velocity of the half step before. It is reported (``ExplicitSolver.stability``, logged),
+and a user time step above the critical one is refused.
 """
 
 from __future__ import annotations
@@ -27,9 +31,14 @@ import numpy as np
 from masonry_fdem.constants import DT_SAFETY
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
-from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, summed_omega2
+from masonry_fdem.solvers._setup import (
+    as_interactions,
+    damped_step,
+    owned_dofsets,
+    stability_terms,
+)
 
-__all__ = ["ExplicitSolver", "EnergyAccount", "UnstableTimeStepError"]
+__all__ = ["ExplicitSolver", "EnergyAccount", "StableStep", "UnstableTimeStepError"]
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +71,38 @@ class EnergyAccount:
     balance: float
     interactions: dict[str, dict[str, float]] = field(default_factory=dict)
     unaccounted: float = 0.0
+
+
+@dataclass(frozen=True)
+class StableStep:
+    """The critical time step of one dof set and what sets it.
+
+    Attributes:
+        omega2: the ω² bounds [1/s²] that add up, by source ("elements" for the blocks'
+            elements, else the interaction's name).
+        gamma: the damper rate bounds γ [1/s] that add up, by interaction name.
+        local_damping: Cundall's local damping α of the set's solver (the step is divided
+            by √(1 + α) of the largest α).
+        dt: the critical step [s], ``4/(√(4ω² + γ²) + γ) / √(1 + α)`` (∞: nothing bounds it).
+    """
+
+    omega2: dict[str, float]
+    gamma: dict[str, float]
+    local_damping: float
+    dt: float
+
+    def __str__(self) -> str:
+        w2 = sum(self.omega2.values())
+        g = sum(self.gamma.values())
+        terms = ", ".join(f"{k} {v:.3g}" for k, v in self.omega2.items())
+        text = f"dt {self.dt:.4g} s from omega^2 {w2:.3g} 1/s^2 ({terms})"
+        if g > 0:
+            dampers = ", ".join(f"{k} {v:.3g}" for k, v in self.gamma.items())
+            text += (f", damper rate {g:.3g} 1/s ({dampers}; zeta {g / (2 * np.sqrt(w2)):.3g})"
+                     if w2 > 0 else f", damper rate {g:.3g} 1/s ({dampers})")
+        if self.local_damping > 0:
+            text += f", local damping {self.local_damping:.3g}"
+        return text
 
 
 class _Set:
@@ -132,14 +173,19 @@ class ExplicitSolver:
             if not 0.0 <= a < 1.0:
                 raise ValueError(f"local damping must lie in [0, 1), got {a} for {name!r}")
         alpha = {k: float(a) for k, a in alpha.items()}
-        w2 = summed_omega2(self.interactions, owned)
-        self.dt_critical = model.stable_time_step(extra_omega2=w2[BLOCKS])
-        for name in owned:
-            if w2[name] > 0:
-                self.dt_critical = min(self.dt_critical, 2.0 / np.sqrt(w2[name]))
+        self.names = _unique_names(self.interactions)
+        w2, gamma = stability_terms(self.interactions, owned, self.names)
+        w2[BLOCKS] = {"elements": model.stable_omega2(), **w2[BLOCKS]}
         # local damping stiffens a mode whose velocity opposes its force (the highest
         # one, alternating each step) by up to 1 + α: the critical step shrinks by √(1 + α)
-        self.dt_critical /= np.sqrt(1.0 + max(alpha.values(), default=0.0))
+        a_max = max(alpha.values(), default=0.0)
+        #: the critical step of each dof set and its terms (:class:`StableStep`)
+        self.stability = {
+            name: StableStep(w2[name], gamma[name], a_max,
+                             damped_step(sum(w2[name].values()), sum(gamma[name].values()))
+                             / np.sqrt(1.0 + a_max))
+            for name in (BLOCKS, *owned)}
+        self.dt_critical = min(st.dt for st in self.stability.values())
         if dt is None:
             if not 0 < safety <= 1:
                 raise ValueError(f"time-step safety factor must be in (0, 1], got {safety}")
@@ -149,7 +195,8 @@ class ExplicitSolver:
         elif dt > self.dt_critical:
             raise UnstableTimeStepError(
                 f"time step {dt:.6g} s exceeds the stable time step "
-                f"{self.dt_critical:.6g} s (2/omega_max of the blocks and interactions)"
+                f"{self.dt_critical:.6g} s (of the blocks, interactions and dampers: "
+                + "; ".join(f"{k}: {v}" for k, v in self.stability.items()) + ")"
             )
         if damping < 0:
             raise ValueError(f"damping must be >= 0 1/s, got {damping}")
@@ -183,12 +230,13 @@ class ExplicitSolver:
                         for _ in self.interactions]
         # work of each interaction's forces on the distributed and on the replicated sets
         self.work = np.zeros((2, len(self.interactions)))
-        self.names = _unique_names(self.interactions)
         if model.comm.rank == 0:
             log.info(
                 "explicit: dt = %.4g s (critical %.4g s, safety %.3g)",
                 self.dt, self.dt_critical, self.dt / self.dt_critical,
             )
+            for name, st in self.stability.items():
+                log.info("explicit: stable step of %s: %s", name, st)
 
     def _kinetic(self, s: _Set) -> float:
         ke = 0.5 * float(np.dot(s.mass * s.v, s.v))
