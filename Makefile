@@ -43,10 +43,12 @@ demo: precompile
 demo-trl: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/trl_arch.py --out out_trl
 
-# a single-span arch bridge with fill: collapse load against the axle's position, eight
-# positions, with fill and bare (issue #22; about 4 minutes on 2 cores)
+# arch bridges with fill (issue #22): a single span, collapse load against the axle's
+# position, eight positions, with fill and bare (about 4 minutes on 2 cores); then two
+# spans on a pier on soil under a traversing bogie, seven positions (about 18 minutes)
 demo-bridge: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/bridge.py --out out_bridge
+	$(MPIRUN) -n $(NP) $(PY) demos/bridge_two_span.py --out out_bridge_two_span
 
 # a small anchor layout search, then layouts per hour on the reference arch (under a
 # minute on 2 cores)
