@@ -2,7 +2,8 @@
 abnormal vehicle's bogie traversing it (issue #22; the reference paper's first
 application, its Figure 6).
 
-The bridge (``masonry_fdem.geometry.bridge.Bridge``): two 6 m segmental stone spans
+The case ``cases/bridge_two_span.toml`` (every value argued there; built by
+``masonry_fdem.geometry.bridge.Bridge``): two 6 m segmental stone spans
 (rise 1.5 m, 0.4 m rings, dry joints μ 0.6) on a 1.5 m pier and two abutments, 2 m from
 the foundation to the springings; 0.4 m of granular fill (Mohr–Coulomb) and 0.1 m of
 surfacing over the crowns; the pier stands on a 3 m deep Mohr–Coulomb soil, the abutments
@@ -23,7 +24,6 @@ over the pier.
 from __future__ import annotations
 
 import argparse
-import math
 import time
 from pathlib import Path
 
@@ -31,59 +31,39 @@ from mpi4py import MPI
 
 import numpy as np
 
-from masonry_fdem.assessment.bridge import Vehicle, bridge_model, load_bridge
-from masonry_fdem.geometry.bridge import Bridge, Span
-from masonry_fdem.interactions.joints import JointMaterial
+from masonry_fdem.assessment.bridge_case import load_bridge_case
 from masonry_fdem.io.plot import plot_blocks
-from masonry_fdem.materials import MohrCoulomb
-from masonry_fdem.materials.elastic import Material
 
 TONNE = 9806.65  # [N]
 
 ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
 ap.add_argument("--out", default="out_bridge_two_span")
+ap.add_argument("--case", default=str(Path(__file__).resolve().parents[1] / "cases" /
+                                      "bridge_two_span.toml"))
 ap.add_argument("--positions", type=float, nargs="*", default=None,
                 help="x [m] of the bogie's centre (default: seven from the first span's "
                      "quarter to the pier)")
 args = ap.parse_args()
 comm = MPI.COMM_WORLD
 
-# -- the bridge (every value a representative one: the single-span case's stone, fill and
-# mortar, cases/bridge_single_span.toml, where each is argued)
-SPAN = Span(span=6.0, rise=1.5, ring_thickness=0.4, voussoirs=24)
-BRIDGE = Bridge(spans=(SPAN, SPAN), piers=(1.5,), pier_height=2.0, abutment_width=1.0,
-                cover=0.5, surfacing=0.1, soil_depth=3.0, soil_extent=(3.0, 10.5))
-MATERIALS = {
-    "masonry": Material(density=2300.0, E=10e9, nu=0.2),        # sandstone in lime mortar
-    "pier": Material(density=2300.0, E=10e9, nu=0.2),
-    "fill": MohrCoulomb(density=2000.0, E=50e6, nu=0.3, c=5e3, phi=35.0),  # granular fill
-    # a bituminous surfacing on a granular road base: stiff and cohesive
-    "surfacing": MohrCoulomb(density=2300.0, E=1e9, nu=0.3, c=100e3, phi=35.0),
-    # a firm clayey sand under the pier
-    "soil": MohrCoulomb(density=1900.0, E=40e6, nu=0.3, c=10e3, phi=30.0),
-}
-MORTAR = JointMaterial(kn=1e11, ks=4e10, tan_phi=0.6)  # dry lime joints (RING's 0.6)
-KN = 20.0 * 50e6 / 0.2  # the fill interface: stiff beside the fill's own compliance
-INTERFACE = JointMaterial(kn=KN, ks=KN / 2.6, tan_phi=math.tan(math.radians(2 / 3 * 35.0)))
-BOGIE = Vehicle(offsets=(0.9, -0.9), loads=(1.0, 1.0), patch=0.3)
-SIZES = {"masonry": 0.2, "pier": 0.3, "fill": 0.2, "surfacing": 0.1, "soil": 0.4,
-         "wall": 0.3}
-
-positions = args.positions or [1.5, 2.25, 3.0, 3.75, 4.5, 5.25, 6.75]
+case = load_bridge_case(args.case)
+BRIDGE = case.bridge
+SPAN = BRIDGE.spans[0]
+positions = list(args.positions or case.positions)
+if not positions:
+    raise SystemExit(f"{args.case}: no vehicle.positions, and none given (--positions)")
 out = Path(args.out)
 if comm.rank == 0:
     out.mkdir(parents=True, exist_ok=True)
 comm.barrier()
-x_pier = 0.5 * (BRIDGE.springings()[0][1] + BRIDGE.springings()[1][0])
+sp = BRIDGE.springings()
+x_pier = 0.5 * (sp[0][1] + sp[1][0]) if len(sp) > 1 else sp[0][1]  # the first pier
 
 t0 = time.perf_counter()
 rows, drawn = [], {}
 for k in range(comm.rank, len(positions), comm.size):
     x = positions[k]
-    model, inter, axles = bridge_model(BRIDGE, MATERIALS, MORTAR, INTERFACE, BOGIE, x,
-                                       mesh_size=SIZES, comm=MPI.COMM_SELF)
-    run = load_bridge(model, inter, axles, INTERFACE, BRIDGE.road_level(), increment=1e-3,
-                      max_displacement=0.1, stop_drop=0.1, comm=MPI.COMM_SELF)
+    model, run = case.run(x, comm=MPI.COMM_SELF)
     rows.append(dict(x=x, load=run.peak, collapsed=run.collapsed,
                      status=run.status.status.value, line=run.line(), seconds=run.seconds,
                      cells=model.blocks.n_cells))
@@ -120,9 +100,11 @@ if comm.rank == 0:
         f"{rows[0]['cells']} triangles. Spans 2 × {SPAN.span:g} m (rise {SPAN.rise:g} m, "
         f"ring {SPAN.ring_thickness:g} m), pier {b.piers[0]:g} m at x = {x_pier:g} m on "
         f"{b.soil_depth:g} m of soil; road {b.road_level():.2f} m, cover {b.cover:g} m "
-        f"(surfacing {b.surfacing:g} m). Bogie: two equal axles 1.8 m apart, 0.3 m "
-        "patches; load = both axles, per 1 m of barrel width.", "",
-        "| bogie centre x [m] | / first span | collapse load [kN] | [t] | status | time [s] |",
+        f"(surfacing {b.surfacing:g} m). Vehicle: axles at {list(case.vehicle.offsets)} m "
+        f"from its centre, relative loads {list(case.vehicle.loads)}, "
+        f"{case.vehicle.patch:g} m patches; the load is the vehicle's total, per "
+        f"{b.width:g} m of barrel width.", "",
+        "| vehicle centre x [m] | / first span | collapse load [kN] | [t] | status | time [s] |",
         "|---|---|---|---|---|---|"]
     for r in rows:
         mark = "" if r["collapsed"] else "≥ "

@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 
 from masonry_fdem.assessment.bridge import Vehicle, bridge_model, load_bridge
+from masonry_fdem.assessment.bridge_case import load_bridge_case
+from masonry_fdem.assessment.specs import CaseError
 from masonry_fdem.geometry.bridge import Bridge, BridgeError, Span
 from masonry_fdem.geometry.fill import upper_envelope
 from masonry_fdem.geometry.polygons import polygon_area
@@ -22,6 +24,7 @@ from masonry_fdem.materials.elastic import Material
 from masonry_fdem.solvers.limit_analysis import find_interfaces
 
 SPAN = Span(2.0, 0.5, 0.15, 12)
+ROOT = __import__("pathlib").Path(__file__).resolve().parents[1]
 
 
 def two_span(**kw) -> Bridge:
@@ -163,3 +166,52 @@ def test_two_span_bridge_same_on_any_number_of_ranks():
           f" curve to the peak {dl:.1e}")
     assert world.status.status is one.status.status
     assert abs(world.peak / one.peak - 1.0) < 1e-8 and dl < 1e-8
+
+
+def test_bridge_case_file_loads():
+    c = load_bridge_case(ROOT / "cases" / "bridge_two_span.toml")
+    b = c.bridge
+    assert len(b.spans) == 2 and b.piers == (1.5,) and b.on_soil("pier:0")
+    assert not b.on_soil("abutment:left")
+    assert c.positions == (1.5, 2.25, 3.0, 3.75, 4.5, 5.25, 6.75)
+    assert c.interface.tan_phi == pytest.approx(math.tan(math.radians(2 / 3 * 35.0)))
+    assert c.interface.kn == pytest.approx(20 * 50e6 / 0.2)
+    assert isinstance(c.materials["soil"], MohrCoulomb)
+    assert c.vehicle.axles(3.0) == [(3.9, 0.5), (2.1, 0.5)]
+
+
+def _case(**changes) -> dict:
+    import tomllib
+
+    d = tomllib.loads((ROOT / "cases" / "bridge_two_span.toml").read_text())
+    for path, value in changes.items():
+        *head, key = path.split("__")
+        t = d
+        for h in head:
+            t = t[h]
+        if value is None:
+            t.pop(key)
+        else:
+            t[key] = value
+    return d
+
+
+@pytest.mark.parametrize("changes, expected", [
+    (dict(bridge__spans=None), "bridge.spans: missing"),
+    (dict(bridge__piers=None), "2 spans need 1 pier"),
+    (dict(bridge__piers=[0.2]), "overlap above pier 0"),
+    (dict(bridge__soil_extent=[7.0, 12.0]), "pier:0 stands partly off the foundation soil"),
+    (dict(vehicle__positions=[14.5]), "vehicle.positions: at 14.5 m, axle 0"),
+    (dict(bridge__materials__fill="stone"), "bridge.materials.fill: [materials.stone] is "
+                                            "elastic"),
+    (dict(bridge__materials__soil="clay"), "bridge.materials.soil: no [materials.clay]"),
+    (dict(bridge__cover=-1.0), "bridge.cover: must be > 0"),
+    (dict(bridge__surfacing=0.6), "thinner than the cover"),
+    (dict(bridge__span=6.0), "unknown key 'span' in [bridge]"),
+    (dict(vehicle__loads=[1.0]), "one load per axle"),
+    (dict(analysis__stop_drop=1.5), "analysis.stop_drop: must be < 1"),
+])
+def test_bad_bridge_case_is_named(changes, expected):
+    with pytest.raises(CaseError) as info:
+        load_bridge_case(_case(**changes))
+    assert expected in str(info.value)
