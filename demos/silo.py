@@ -6,7 +6,11 @@ with a polydisperse packing of disks, which settles under gravity on a gate unde
 outlet. The gate is then pulled aside and the fill flows out onto a floor below. The discharged mass is
 recorded and its rate over the steady part of the flow is printed, next to the
 two-dimensional Beverloo estimate W = C ρ_b √g (D − k d)^{3/2} (C ≈ 1.0, k ≈ 1.5; ρ_b the
-bulk density per unit thickness, d the mean diameter) as an order-of-magnitude check.
+bulk density per unit thickness, d the mean diameter) as an order-of-magnitude check,
+and so is the energy account of the whole run (kinetic, the contacts' stored energy, the
+disks' restitution, friction and rolling losses, the disk–wall contacts' friction and
+damping, the damping of the settling stage, the work of gravity and of the gate's
+drive, and the residual).
 Writes ``history.csv``, ``discharge.png``, ``silo_*.png`` pictures and ParaView files
 (``disks.pvd``; blocks in ``displacement.bp``) to ``--out``.
 
@@ -99,6 +103,7 @@ def main() -> None:
             plot_blocks(model, out / "silo_flowing.png", field="block", disks=disks,
                         title=f"silo, {s.t - t_open:.2f} s after opening")
     times, out_mass = np.array(times), np.array(out_mass)
+    energy = s.energies()  # collective
     # steady discharge: fit between 20 % and 70 % of the discharged mass at the end
     lo, hi = 0.2 * out_mass[-1], 0.7 * out_mass[-1]
     sel = (out_mass >= lo) & (out_mass <= hi)
@@ -113,6 +118,10 @@ def main() -> None:
         print(f"discharge rate {rate:.3f} kg/s (Beverloo 2D estimate {beverloo:.3f} kg/s); "
               f"{out_mass[-1] / total:.0%} discharged after {args.time:.2f} s; "
               f"{time.perf_counter() - t0:.1f} s")
+        print(energy.summary())
+        print(f"energy residual {energy.residual:.3e} J: "
+              f"{100 * energy.relative_residual:.4f} % of the work done "
+              f"({energy.scale:.4g} J)")
         out.mkdir(parents=True, exist_ok=True)
         np.savetxt(out / "history.csv", np.c_[times, out_mass], delimiter=",",
                    header="time_after_opening_s,discharged_mass_kg", comments="")

@@ -65,6 +65,9 @@ class LawContext:
         stress: for a return-mapping law, the second Piola–Kirchhoff stress its kernel
             computed [Pa] (2×2 UFL); None otherwise.
         energy: for a return-mapping law, its elastic energy density [J/m³]; else None.
+        E_committed: the Green–Lagrange strain at the last commit (UFL; for
+            :meth:`Material.dissipation_increment`, whose trapezoidal rule over the
+            increment takes the strains at both of its ends).
     """
 
     mesh: Any
@@ -79,6 +82,7 @@ class LawContext:
     state: dict = field(default_factory=dict)
     stress: Any = None
     energy: Any = None
+    E_committed: Any = None
 
     @property
     def I(self):  # noqa: E743

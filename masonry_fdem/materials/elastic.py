@@ -85,6 +85,15 @@ class Material:
         """Stored energy per reference volume [J/m³] (St. Venant–Kirchhoff)."""
         return svk_energy_density(k.E, k.lam, k.mu)
 
+    def dissipation_increment(self, k):
+        """The energy per reference volume [J/m³] the law dissipates when the trial
+        history (:meth:`trial_history` at the current strain) is committed over the
+        committed one, as UFL; None (the default) for a law that dissipates nothing, or
+        whose history is not dissipative. The model sums it at every commit that
+        changes a history variable (:meth:`~masonry_fdem.model.Model.damage_dissipation`),
+        for the explicit solver's energy account."""
+        return None
+
     def history(self) -> dict[str, float]:
         """Scalar history variables at the quadrature points and their initial values."""
         return {}

@@ -215,11 +215,20 @@ class QuadratureState:
                 acc[rows, :, j] += sign * st[rows, :3]
         self.ct[rows] = acc[rows] / (2.0 * h)[:, None, None]
 
-    def commit(self) -> None:
-        """Accept the trial state at the current displacement."""
+    def commit(self, on_change=None) -> None:
+        """Accept the trial state at the current displacement. ``on_change()``, if given,
+        is called while the committed history is still in place when a trial value
+        differs from its committed one (on this rank)."""
+        changed = False
         for fn, expr, cells, rows, buf, _ in self._history:
             if cells.size:
                 expr.eval(self.mesh, cells, values=buf)
+                if on_change is not None and not changed:
+                    changed = not np.array_equal(buf.ravel(), fn.x.array[rows])
+        if changed:
+            on_change()
+        for fn, _, cells, rows, buf, _ in self._history:
+            if cells.size:
                 scatter_rows(buf.reshape(-1, 1), rows, fn.x.array.reshape(-1, 1))
         if self._rm:
             self.s0[:] = self.s1

@@ -183,10 +183,14 @@ class Model:
         H = ufl.grad(u)
         F = ufl.Identity(2) + H
         E = green_lagrange(H)
+        # the displacement at the last commit (kept only when a law dissipates at commits)
+        self.u_committed = dolfinx.fem.Function(self.V, name="displacement_committed")
+        E_committed = green_lagrange(ufl.grad(self.u_committed))
         h = ufl.sqrt(2.0 * ufl.CellVolume(mesh))
         h_cells = np.sqrt(2.0 * self.blocks.cell_area)
         f_int = 0
         energy = 0
+        dissipation = 0
         self._dxq = dxq
         self._terms: list[tuple[int, Material, object]] = []  # (material id, law, P)
         for mid, name in enumerate(self.blocks.material_names):
@@ -199,7 +203,8 @@ class Model:
             self.lam[mid] = dolfinx.fem.Constant(mesh, lam)
             self.mu[mid] = dolfinx.fem.Constant(mesh, mu)
             self.rho[mid] = dolfinx.fem.Constant(mesh, mat.density)
-            k = LawContext(mesh, u, H, F, E, self.lam[mid], self.mu[mid], hyp, h)
+            k = LawContext(mesh, u, H, F, E, self.lam[mid], self.mu[mid], hyp, h,
+                           E_committed=E_committed)
             if isinstance(mat, ReturnMapping):
                 self.qstate.add_return_mapping(mid, mat, k, hyp)
             self.qstate.add_history(mid, mat, k)
@@ -209,10 +214,18 @@ class Model:
                 raise ValueError(f"material {name!r}: first_piola() must give a 2x2 UFL tensor")
             f_int += ufl.inner(P, ufl.grad(w)) * self.w_const * dxq(mid)
             energy += mat.energy_density(k) * self.w_const * dxq(mid)
+            inc = mat.dissipation_increment(k)
+            if inc is not None:
+                dissipation += inc * self.w_const * dxq(mid)
             self._terms.append((mid, mat, P))
         self.qstate.finalise()
         self.f_int_form = dolfinx.fem.form(f_int)
         self.energy_form = dolfinx.fem.form(energy)
+        # the energy the history laws (damage) dissipate at a commit, and its sum on this
+        # rank [J]
+        self.dissipation_form = (None if isinstance(dissipation, int)
+                                 else dolfinx.fem.form(dissipation))
+        self._damage_dissipated = 0.0
         self._constants = dolfinx.fem.pack_constants(self.f_int_form)
         self._coeffs = dolfinx.fem.pack_coefficients(self.f_int_form)
         self._setup_packing(f_int)
@@ -560,9 +573,18 @@ class Model:
 
         The solvers call it: the explicit solver every step, dynamic relaxation when a
         load increment has converged. Between commits, every internal-force evaluation
-        recomputes the trial state from the committed one.
+        recomputes the trial state from the committed one. The energy a history law
+        dissipates in the commit (``Material.dissipation_increment``: damage) is added
+        to :meth:`damage_dissipation` (assembled only when a history variable changes).
         """
-        self.qstate.commit()
+        if self.dissipation_form is None:
+            self.qstate.commit()
+            return
+        self.qstate.commit(self._add_dissipation)
+        self.u_committed.x.array[:] = self.u.x.array
+
+    def _add_dissipation(self) -> None:
+        self._damage_dissipated += dolfinx.fem.assemble_scalar(self.dissipation_form)
 
     @property
     def rate_time_step(self) -> float:
@@ -632,6 +654,16 @@ class Model:
         area = np.abs(self.blocks.cell_area[self.dmesh.cell_input])
         wp = qs.s0[qs.qdofs, PLASTIC_WORK].mean(axis=1)
         return self.comm.allreduce(float(np.dot(wp, area)) * self.width)
+
+    def damage_dissipation(self) -> float:
+        """Energy [J] the history laws have dissipated so far (damage: ∫ W̄ Δd w dX
+        summed over the commits; collective)."""
+        return self.comm.allreduce(self._damage_dissipated)
+
+    def element_dissipation(self) -> float:
+        """Energy [J] the blocks' materials have dissipated so far: plastic work and
+        damage (collective)."""
+        return self.plastic_work() + self.damage_dissipation()
 
     def strain_energy(self) -> float:
         """Exact stored strain energy ∫ W(E) w dX [J] (collective)."""
@@ -719,6 +751,8 @@ class Model:
         self.u.x.array[:] = 0.0
         self.v[:] = 0.0
         self.qstate.reset()
+        self._damage_dissipated = 0.0
+        self.u_committed.x.array[:] = 0.0
 
     def __repr__(self) -> str:
         return (

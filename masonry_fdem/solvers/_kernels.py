@@ -15,7 +15,8 @@ E_EXTERNAL = 2  # work of applied loads [J]
 E_DAMPING = 3  # energy dissipated by mass-proportional damping [J]
 E_SUPPORT = 4  # work of the reactions at prescribed dofs [J]
 E_CONTACT = 5  # work of the contact forces [J]
-N_ENERGY = 6
+E_EXCHANGED = 6  # Σ over the steps of |work of the loads| + |work of the reactions| [J]
+N_ENERGY = 7
 
 
 @njit(cache=True)
@@ -36,6 +37,9 @@ def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, da
     ``energy`` (N_ENERGY,) accumulates the energy account; with the half-step kinetic
     energy and midpoint work increments the discrete balance
     K + W_int + W_damp − W_ext − W_support − W_contact = K(0) holds to round-off.
+    ``energy[E_EXCHANGED]`` adds the step's |W_ext| + |W_support| (the energy the loads
+    and supports put through the set, however its sign changes: the scale of the
+    account's residual).
     ``du`` receives the midpoint displacement increment (v(n−½) + v(n+½)) dt/2 of each dof,
     over which any force's work in the step is ``f · du``.
     """
@@ -77,6 +81,7 @@ def central_difference_step(u, v, f_int, f_ext, f_con, mass, minv, presc, vp, da
     energy[E_DAMPING] += w_damp
     energy[E_SUPPORT] += w_sup
     energy[E_CONTACT] += w_con
+    energy[E_EXCHANGED] += abs(w_ext) + abs(w_sup)
 
 
 @njit(cache=True)

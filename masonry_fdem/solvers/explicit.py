@@ -7,6 +7,17 @@ rotations, anchor bar nodes — updates velocities and displacements, overwrites
 prescribed dofs, computes support reactions and accumulates the energy account. Nothing
 is allocated in the step.
 
+The energy account (:meth:`ExplicitSolver.energies`, :class:`EnergyAccount`) closes: the
+kinetic energy, the energies stored in the elements and in every interaction, every
+dissipation (the elements' plasticity and damage, each interaction's, the solver's
+damping) minus the work of the loads and of the supports equal the total at the start,
+up to a ``residual`` that is round-off for a conservative run. Every work is counted as
+central difference does (force at u(n) times the midpoint increment (u(n+1) − u(n−1))/2,
+kinetic energy at the half step), and the stored energies, evaluated where the forces
+were (at u(n)), are carried to the same level — the half step — by their forces' work
+over the half step: ``stored − ½ f(n)·(u(n+1) − u(n))``, exact for linear springs (where
+it is ½ u(n)·K u(n+1), the energy central difference conserves).
+
 The time step is ``safety`` times the critical one, the smallest over the dof sets of
 ``(2/ω)(√(1 + ζ²) − ζ)`` = ``4/(√(4ω² + γ²) + γ)``: ω² bounded for the blocks by the
 largest element eigenvalue of the linear stiffness with lumped mass plus the bounds the
@@ -52,14 +63,37 @@ class EnergyAccount:
     """Energies [J] since the start of the run, over every dof set (block nodes, disks,
     anchor bars) and global over ranks.
 
-    ``balance`` = kinetic + internal + damping − external − support − contact − initial
-    kinetic, zero up to round-off for the central-difference identity; ``internal`` is the
-    work done against the blocks' internal forces, i.e. the strain energy for an elastic
-    body; ``contact`` is the work done BY the forces of all interactions. ``interactions``
-    holds, per interaction name, its own :meth:`energies` (``stored`` and ``dissipated``)
-    and ``work``, the work its forces did; ``unaccounted`` = contact + Σ (stored +
-    dissipated) is the work no interaction reports as stored or dissipated (zero up to
-    the time discretisation when every one accounts for its energy).
+    The account::
+
+        kinetic + Σ stored + Σ dissipated + damping − external − support
+            = initial + residual
+
+    ``stored`` holds the energy stored now, by store: ``"strain"`` (the blocks' elements:
+    their exact strain energy) and each interaction by name (its ``energies()["stored"]``:
+    contact penalty, joints, anchors, disks, ...), all at the half step of the kinetic
+    energy (see the module doc). ``dissipated`` holds the energy dissipated since the
+    start, by mechanism: ``"elements"`` (plastic work and damage of the blocks'
+    materials, :meth:`Model.element_dissipation`) and each interaction's (by its details
+    where it gives them — ``"contact friction"``, ``"contact damper"`` — else by name).
+    ``damping`` is the solver's (mass-proportional and local) damping, ``external`` the
+    work of the applied loads (gravity, live loads), ``support`` that of the reactions at
+    prescribed dofs, ``initial`` the total at the start (kinetic + stored), and
+    ``residual`` what is left over: round-off for a conservative run, else the time
+    discretisation of the laws (contacts opening and closing within a step, friction,
+    nonlinear springs), plus any energy an interaction does not report (the anchors' bond
+    and plasticity). ``exchanged`` is Σ over the steps of |work of the loads| + |work of
+    the supports| (of each rank's part: a little more on several ranks), and
+    :attr:`scale` = |initial| + exchanged the energy put through the system, the
+    measure of the residual (:attr:`relative_residual`).
+
+    The solver's own terms: ``balance`` = kinetic + internal + damping − external −
+    support − contact − initial kinetic, the central-difference identity (round-off);
+    ``internal`` is the work done against the blocks' internal forces, ``contact`` the
+    work done BY the forces of all interactions. ``interactions`` holds, per interaction
+    name, its own :meth:`energies` as it reports them (``stored``, ``dissipated`` since
+    it was made, details), ``work`` (the work its forces did in this run) and
+    ``unaccounted`` (its share of the residual: work + stored at the half step +
+    dissipated in the run − stored at the start); ``unaccounted`` is their sum.
     """
 
     kinetic: float
@@ -71,6 +105,45 @@ class EnergyAccount:
     balance: float
     interactions: dict[str, dict[str, float]] = field(default_factory=dict)
     unaccounted: float = 0.0
+    stored: dict[str, float] = field(default_factory=dict)
+    dissipated: dict[str, float] = field(default_factory=dict)
+    initial: float = 0.0
+    residual: float = 0.0
+    exchanged: float = 0.0
+
+    @property
+    def total_stored(self) -> float:
+        """Σ of the stored energies [J]."""
+        return float(sum(self.stored.values()))
+
+    @property
+    def total_dissipated(self) -> float:
+        """Σ of the dissipations in the run, the solver's damping included [J]."""
+        return float(sum(self.dissipated.values())) + self.damping
+
+    @property
+    def scale(self) -> float:
+        """The energy put through the system [J]: |initial| + exchanged."""
+        return abs(self.initial) + self.exchanged
+
+    @property
+    def relative_residual(self) -> float:
+        """residual / scale (0 when nothing happened)."""
+        return self.residual / self.scale if self.scale > 0 else 0.0
+
+    def summary(self) -> str:
+        """The account in a few lines [J], for a demo's or a user's printout."""
+        def terms(d):
+            return ", ".join(f"{k} {v:.4g}" for k, v in d.items())
+
+        return (
+            f"energy account [J]: kinetic {self.kinetic:.4g}; stored: "
+            f"{terms(self.stored)}\n"
+            f"  dissipated: {terms(self.dissipated)}, solver damping {self.damping:.4g}\n"
+            f"  work of the loads {self.external:.4g}, of the supports {self.support:.4g};"
+            f" initial {self.initial:.4g}\n"
+            f"  residual {self.residual:.3e} ({self.relative_residual:.2e} of "
+            f"{self.scale:.4g} put through)")
 
 
 @dataclass(frozen=True)
@@ -220,6 +293,8 @@ class ExplicitSolver:
         for s in self.sets:
             s.local = alpha.get(s.name, 0.0)
         self.kinetic0 = sum(self._kinetic(s) for s in self.sets)
+        # the account's values at the start, taken in the first step (_StartValues)
+        self._start: _StartValues | None = None
         u = {s.name: s.u for s in self.sets}
         v = {s.name: s.v for s in self.sets}
         # each interaction adds into arrays of its own, so the work of its forces is known
@@ -269,6 +344,8 @@ class ExplicitSolver:
                     s.f_con += st.f[s.name]
             c.commit()
         m.commit_state()
+        if self._start is None:
+            self._start = self._start_values()
         for s in self.sets:
             K.central_difference_step(s.u, s.v, s.f_int, s.f_ext, s.f_con, s.mass, s.minv,
                                       s.presc, s.vp, self.damping, self.dt, s.reaction,
@@ -336,9 +413,48 @@ class ExplicitSolver:
                  for s in self.sets)
         return bool(self.model.comm.allreduce(ok, op=MPI.LAND))
 
+    def _half_step_work(self) -> np.ndarray:
+        """½ dt f·v of the internal force (entry 0) and of each interaction's forces,
+        over every dof set and rank (collective): the forces' work over the half step
+        u(n) → u(n+1) after a step (v is v(n+½)), or u(−1) → u(0) in the first one
+        before the update (v is v(−½))."""
+        n = len(self.interactions)
+        parts = np.zeros((2, n + 1))
+        b = self.sets[0]
+        parts[0, 0] = K.dot(b.f_int, b.v)
+        for k, st in enumerate(self._states):
+            for s in self.sets:
+                parts[int(s.replicated), k + 1] += K.dot(st.f[s.name], s.v)
+        total = self.model.comm.allreduce(parts[0]) + parts[1]
+        return 0.5 * self.dt * total
+
+    def _start_values(self) -> _StartValues:
+        """The account at the start, in the first step after the forces at u(0) and the
+        commit (collective): the stored energies at u(0) carried back to the half step
+        before by their forces' work over u(−1) → u(0), and the dissipations so far (the
+        first step's included, as its work is excluded)."""
+        lag = self._half_step_work()
+        own = [dict(c.energies()) for c in self.interactions]
+        return _StartValues(
+            strain=self.model.strain_energy() - lag[0],
+            elements=self.model.element_dissipation(),
+            stored=[float(e.get("stored", 0.0)) + lag[k + 1] for k, e in enumerate(own)],
+            dissipated=own)
+
+    def _strain_before_step(self) -> float:
+        """The blocks' strain energy at u(n), where the last internal forces were
+        evaluated (u(n+1) − dt v(n+½); collective)."""
+        u = self.model.u.x.array
+        saved = u.copy()
+        u -= self.dt * self.model.v
+        try:
+            return self.model.strain_energy()
+        finally:
+            u[:] = saved
+
     def energies(self) -> EnergyAccount:
         """The energy account over every dof set, summed over ranks, with each
-        interaction's own energies (collective)."""
+        interaction's own energies (collective; see :class:`EnergyAccount`)."""
         comm = self.model.comm
         e = np.zeros(K.N_ENERGY)
         for s in self.sets:
@@ -348,23 +464,50 @@ class ExplicitSolver:
         for s in self.sets:
             if s.replicated:
                 e = e + s.energy
+        if self._start is None:  # no step yet: the kinetic energy is the initial one
+            e[K.E_KINETIC] = self.kinetic0
         bal = (
             e[K.E_KINETIC] + e[K.E_INTERNAL] + e[K.E_DAMPING]
             - e[K.E_EXTERNAL] - e[K.E_SUPPORT] - e[K.E_CONTACT] - self.kinetic0
         )
         work = comm.allreduce(self.work[0].copy()) + self.work[1]  # replicated: once
-        per, held = {}, 0.0
-        for name, c, w in zip(self.names, self.interactions, work, strict=True):
-            en = dict(c.energies())
+        m = self.model
+        own = [dict(c.energies()) for c in self.interactions]
+        start = self._start
+        if start is None:  # no step yet: the state as it is, no work done
+            lag = np.zeros(len(self.interactions) + 1)
+            strain = m.strain_energy()
+            start = _StartValues(strain=strain, elements=m.element_dissipation(),
+                                 stored=[float(en.get("stored", 0.0)) for en in own],
+                                 dissipated=own)
+        else:
+            lag = self._half_step_work()
+            strain = self._strain_before_step() + lag[0]
+        stored = {"strain": strain}
+        dissipated = {"elements": m.element_dissipation() - start.elements}
+        per, unaccounted = {}, 0.0
+        for k, (name, en, w) in enumerate(zip(self.names, own, work, strict=True)):
+            held = float(en.get("stored", 0.0)) - lag[k + 1]
+            before = start.dissipated[k]
+            lost = float(en.get("dissipated", 0.0)) - float(before.get("dissipated", 0.0))
+            stored[name] = held
+            dissipated.update(_mechanisms(name, en, before, lost))
             en["work"] = float(w)
-            held += en.get("stored", 0.0) + en.get("dissipated", 0.0)
+            en["unaccounted"] = float(w) + held + lost - start.stored[k]
+            unaccounted += en["unaccounted"]
             per[name] = en
+        initial = self.kinetic0 + start.strain + sum(start.stored)
+        residual = (e[K.E_KINETIC] + sum(stored.values()) + sum(dissipated.values())
+                    + e[K.E_DAMPING] - e[K.E_EXTERNAL] - e[K.E_SUPPORT] - initial)
         return EnergyAccount(
             kinetic=float(e[K.E_KINETIC]), internal=float(e[K.E_INTERNAL]),
             external=float(e[K.E_EXTERNAL]), damping=float(e[K.E_DAMPING]),
             support=float(e[K.E_SUPPORT]), contact=float(e[K.E_CONTACT]),
-            balance=float(bal), interactions=per,
-            unaccounted=float(e[K.E_CONTACT] + held),
+            balance=float(bal), interactions=per, unaccounted=float(unaccounted),
+            stored={k: float(v) for k, v in stored.items()},
+            dissipated={k: float(v) for k, v in dissipated.items()},
+            initial=float(initial), residual=float(residual),
+            exchanged=float(e[K.E_EXCHANGED]),
         )
 
     def reactions(self) -> dict[str, np.ndarray]:
@@ -378,6 +521,31 @@ class ExplicitSolver:
             for name, dofs in s.prescriptions.items():
                 out[name] = s.reaction[dofs].copy()
         return out
+
+
+@dataclass(frozen=True)
+class _StartValues:
+    """The energy account at the start of a run (see ``ExplicitSolver._start_values``):
+    strain and each interaction's stored energy at the half step before the first,
+    the elements' dissipation, and each interaction's own energies, at the start."""
+
+    strain: float
+    elements: float
+    stored: list[float]
+    dissipated: list[dict[str, float]]
+
+
+def _mechanisms(name: str, now: Mapping[str, float], before: Mapping[str, float],
+                lost: float) -> dict[str, float]:
+    """An interaction's dissipation in the run by mechanism: its details (keys ending
+    in ``_dissipated`` or ``_loss``, e.g. the contact's friction and damper) when there
+    are two or more and they add up to its total, else the total under its name."""
+    keys = [k for k in now if k != "dissipated" and k.endswith(("_dissipated", "_loss"))]
+    parts = {k: float(now[k]) - float(before.get(k, 0.0)) for k in keys}
+    if len(parts) >= 2 and abs(sum(parts.values()) - lost) <= 1e-9 * max(1.0, abs(lost)):
+        return {f"{name} {k.removesuffix('_dissipated').removesuffix('_loss')}": v
+                for k, v in parts.items()}
+    return {name: lost}
 
 
 def _unique_names(interactions: list[Interaction]) -> list[str]:
