@@ -45,7 +45,7 @@ demo-trl: precompile
 
 # arch bridges with fill (issue #22): a single span, collapse load against the axle's
 # position, eight positions, with fill and bare (about 4 minutes on 2 cores); then two
-# spans on a pier on soil under a traversing bogie, seven positions (about 18 minutes)
+# spans on a pier on soil under a traversing bogie, four positions (10-20 minutes)
 demo-bridge: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/bridge.py --out out_bridge
 	$(MPIRUN) -n $(NP) $(PY) demos/bridge_two_span.py --out out_bridge_two_span

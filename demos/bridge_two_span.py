@@ -8,7 +8,8 @@ The case ``cases/bridge_two_span.toml`` (every value argued there; built by
 the foundation to the springings; 0.4 m of granular fill (Mohr–Coulomb) and 0.1 m of
 surfacing over the crowns; the pier stands on a 3 m deep Mohr–Coulomb soil, the abutments
 on rigid ground. The vehicle: a two-axle bogie (1.8 m between equal axles, 0.3 m tyre
-patches). At each of its positions the bogie is loaded to collapse, quasi-statically
+patches). At each of its positions (four, from the first span's quarter to the pier)
+the bogie is loaded to collapse, quasi-statically
 (Newton, arc length); the positions are shared among the ranks (one rank per run). The
 bridge is symmetric, so the bogie is moved over the first span and up to the pier.
 
@@ -41,8 +42,7 @@ ap.add_argument("--out", default="out_bridge_two_span")
 ap.add_argument("--case", default=str(Path(__file__).resolve().parents[1] / "cases" /
                                       "bridge_two_span.toml"))
 ap.add_argument("--positions", type=float, nargs="*", default=None,
-                help="x [m] of the bogie's centre (default: seven from the first span's "
-                     "quarter to the pier)")
+                help="x [m] of the vehicle's centre (default: the case's vehicle.positions)")
 args = ap.parse_args()
 comm = MPI.COMM_WORLD
 

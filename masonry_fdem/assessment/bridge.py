@@ -278,33 +278,41 @@ def load_bridge(
     t0 = time.perf_counter()
     joints = interactions[1]
     solver = StaticSolver(model, interactions=interactions, rtol=rtol)
+
+    def relax(why: str) -> RunStatus:
+        """Dynamic relaxation to the current loads and friction, then Newton from its
+        state: where Newton from the last equilibrium cycles (interfaces at their kink
+        between open and closed, or between stick and slip), as the arch assessment
+        does."""
+        from masonry_fdem.solvers import DynamicRelaxation
+
+        DynamicRelaxation(model, interactions=interactions, rtol=1e-6, ke_tol=math.inf,
+                          max_iter=200_000, damping="velocity").solve(0.0)
+        solver.dead_factor = 1.0
+        solver.commit()
+        r0 = solver.solve(0.0)
+        if r0.converged:
+            return RunStatus(Status.LOAD_REACHED, 0.0, 0.0, None,
+                             f"{why}: dynamic relaxation, then Newton")
+        return RunStatus(Status.NOT_CONVERGED, 0.0, 0.0, 0.0,
+                         f"{why}: Newton did not converge, nor after dynamic relaxation "
+                         f"({r0.reason})")
+
     mu = interface.tan_phi
     f = max(10.0, 4.0 * mu)
     joints.set_friction(interface, f)
     st = solver.settle()
     if st.status is not Status.LOAD_REACHED:
-        # Newton from the unloaded state, where the bodies only touch, can cycle (the
-        # friction-only interfaces sit at their kink): dynamic relaxation settles the
-        # bridge, Newton goes on from its state (as the arch assessment does)
-        from masonry_fdem.solvers import DynamicRelaxation
-
-        DynamicRelaxation(model, interactions=interactions, rtol=1e-5, ke_tol=math.inf,
-                          max_iter=50_000, damping="velocity").solve(0.0)
-        solver.dead_factor = 1.0
-        solver.commit()
-        r0 = solver.solve(0.0)
-        st = (RunStatus(Status.LOAD_REACHED, 0.0, 0.0, None, "dead loads applied (dynamic "
-                        "relaxation, then Newton)") if r0.converged else
-              RunStatus(Status.NOT_CONVERGED, 0.0, 0.0, 0.0,
-                        f"dynamic relaxation, then Newton: {r0.reason}"))
+        # Newton from the unloaded state, where the bodies only touch, can cycle
+        st = relax("the dead loads")
     while st.status is Status.LOAD_REACHED and f > mu:
         f = max(mu, 0.5 * f)
         joints.set_friction(interface, f)
         r = solver.solve(solver.load_factor)
-        if not r.converged:
-            st = RunStatus(Status.NOT_CONVERGED, 0.0, 0.0, 0.0,
-                           f"self-weight: the fill's interfaces released to tan δ = {f:.3g}: "
-                           f"Newton did not converge ({r.reason})")
+        if r.converged:
+            solver.commit()
+        else:
+            st = relax(f"the fill's interfaces released to tan δ = {f:.3g}")
     if st.status is not Status.LOAD_REACHED:
         return BridgeRun(replace_detail(st, "self-weight: " + st.detail),
                          seconds=time.perf_counter() - t0)
