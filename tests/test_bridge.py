@@ -194,8 +194,14 @@ def test_bridge_demo_sweeps_positions_and_draws_the_stress(tmp_path, monkeypatch
     if comm.rank == 0:
         text = (out / "sweep.md").read_text()
         row = next(line for line in text.splitlines() if line.startswith("| 0.25 |"))
-        assert "peak passed" in row and "| 34.9 |" in row  # LP with the fill as loads
+        # the LP with the fill as RING models it (passive resistance × 0.33: the
+        # limit-analysis test above gives 49.09 kN)
+        assert "peak passed" in row and "| 49.1 |" in row
         assert "Critical position: 0.25 of the span" in text
+        # the LP's own critical position on its grid of positions, with and without the
+        # passive resistance
+        assert "Limit analysis with fill on a grid of 19 positions" in text
+        assert text.count(" of the span (") == 2
         assert (out / "sweep.png").is_file()
         assert (out / "vertical_stress_0.25.png").is_file()
         assert (out / "fill_0.25" / "report.md").is_file()
