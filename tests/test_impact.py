@@ -83,13 +83,14 @@ def test_damper_never_pulls_and_friction_sees_the_clipped_force():
 
     def forces(vy, vx=0.0):
         X, u, v, facets, own = _two_facets(pen, vy, vx)
-        f = np.zeros(8)
-        fd = np.zeros(8)
+        f = np.zeros((1, 8))  # the pair's forces on the nodes of facet 0, then facet 1
+        fd = np.zeros((1, 8))
         energy = np.zeros(CK.N_ENERGY)
         one = np.ones(1)
         CK.facet_facet_forces(X, u, v, facets, own, own, np.array([[0, 1]], dtype=np.int64),
                               eps * one, eps * one, mu * one, cd * one, 0.1 * one, w, 1e-3,
-                              np.zeros((1, 2)), f, fd, energy, np.zeros(CK.N_WORK))
+                              np.zeros((1, 2)), one, f, fd, energy, np.zeros(CK.N_WORK))
+        f = f[0]
         return f[[5, 7]].sum(), f[[4, 6]].sum(), energy  # on the block: up, along x
 
     up, side, _ = forces(0.0)

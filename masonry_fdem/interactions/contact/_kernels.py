@@ -217,8 +217,9 @@ def _pass_share(q1x, q1y, q2x, q2y, tx, ty):
 @njit(cache=True)
 def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
                  width, dt, tau, f, fdamp, work, stick):
-    """Forces of candidate pair ``k`` added into ``f``, their dampers' part also into
-    ``fdamp`` (see :func:`facet_facet_forces`).
+    """Forces of candidate pair ``k`` on its four nodes added into ``f`` (8,), their
+    dampers' part also into ``fdamp`` (8,): x, y on the nodes of facet ``pairs[k, 0]``
+    (first, second), then on those of ``pairs[k, 1]`` (see :func:`facet_facet_forces`).
 
     ``stick``: no Coulomb return (the tangent at the apex of the friction cone, below).
 
@@ -247,6 +248,8 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         s2n = facets[fs, 1]
         m1n = facets[fm, 0]
         m2n = facets[fm, 1]
+        sb = 4 if p == 0 else 0  # the slave's and the master's slots in f
+        mb = 4 - sb
         q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_zone(
             X, u, facets, fprev, fnext, fs, fm, depth[k], work
         )
@@ -339,30 +342,32 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         e_n += pot
         # friction traction, uniform over the zone, opposes the slave's slip
         a = zlen * width * half * t_new
-        f[2 * s1n] += fs1 * nx - (1.0 - sc) * a * tx
-        f[2 * s1n + 1] += fs1 * ny - (1.0 - sc) * a * ty
-        f[2 * s2n] += fs2 * nx - sc * a * tx
-        f[2 * s2n + 1] += fs2 * ny - sc * a * ty
-        f[2 * m1n] -= fm1 * nx - (1.0 - xic) * a * tx
-        f[2 * m1n + 1] -= fm1 * ny - (1.0 - xic) * a * ty
-        f[2 * m2n] -= fm2 * nx - xic * a * tx
-        f[2 * m2n + 1] -= fm2 * ny - xic * a * ty
+        f[sb] += fs1 * nx - (1.0 - sc) * a * tx
+        f[sb + 1] += fs1 * ny - (1.0 - sc) * a * ty
+        f[sb + 2] += fs2 * nx - sc * a * tx
+        f[sb + 3] += fs2 * ny - sc * a * ty
+        f[mb] -= fm1 * nx - (1.0 - xic) * a * tx
+        f[mb + 1] -= fm1 * ny - (1.0 - xic) * a * ty
+        f[mb + 2] -= fm2 * nx - xic * a * tx
+        f[mb + 3] -= fm2 * ny - xic * a * ty
         if cd > 0.0:
-            fdamp[2 * s1n] += ds1 * nx
-            fdamp[2 * s1n + 1] += ds1 * ny
-            fdamp[2 * s2n] += ds2 * nx
-            fdamp[2 * s2n + 1] += ds2 * ny
-            fdamp[2 * m1n] -= dm1 * nx
-            fdamp[2 * m1n + 1] -= dm1 * ny
-            fdamp[2 * m2n] -= dm2 * nx
-            fdamp[2 * m2n + 1] -= dm2 * ny
+            fdamp[sb] += ds1 * nx
+            fdamp[sb + 1] += ds1 * ny
+            fdamp[sb + 2] += ds2 * nx
+            fdamp[sb + 3] += ds2 * ny
+            fdamp[mb] -= dm1 * nx
+            fdamp[mb + 1] -= dm1 * ny
+            fdamp[mb + 2] -= dm2 * nx
+            fdamp[mb + 3] -= dm2 * ny
     return e_n, e_t, d_f, d_v, active, apex
 
 
 @njit(cache=True)
 def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
-                       width, dt, tau, f, fdamp, energy, work):
-    """Penalty normal, viscous normal and Coulomb friction forces of all candidate pairs.
+                       width, dt, tau, counted, fp, fdp, energy, work):
+    """Penalty normal, viscous normal and Coulomb friction forces of all candidate pairs,
+    pair by pair (summed into the nodes by :func:`gather_pair_forces`, in an order that
+    does not depend on how the blocks are spread over ranks).
 
     Args:
         eps_n, eps_t, mu, depth: (n_p,) normal and tangential penalty [Pa/m], friction
@@ -372,9 +377,12 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
         width: out-of-plane width [m].
         dt: time step [s] (tangential slip increment = relative velocity · dt).
         tau: (n_p, 2) in/out tangential traction history [Pa] of the two passes.
-        f: (2 n_nodes,) out, contact forces are ADDED [N].
-        fdamp: (2 n_nodes,) out, the dampers' part of them is ADDED [N] (the traction
-            spring + damper, clipped, less the spring's), for the energy account.
+        counted: (n_p,) weight of each pair in ``energy`` (1; 0 for the copy of a pair
+            another rank counts).
+        fp: (n_p, 8) out: the contact forces of each pair on its four nodes [N], x and y
+            on the nodes of facet ``pairs[k, 0]``, then on those of ``pairs[k, 1]``.
+        fdp: (n_p, 8) out: the dampers' part of them [N] (the traction spring + damper,
+            clipped, less the spring's), for the energy account.
         energy: (N_ENERGY,) out: [normal penalty energy, tangential elastic energy,
             frictional dissipation this step, damper dissipation this step with the
             velocities the dampers see (the half step before)] [J].
@@ -385,17 +393,52 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
     d_f = 0.0
     d_v = 0.0
     for k in range(pairs.shape[0]):
+        for j in range(8):
+            fp[k, j] = 0.0
+            fdp[k, j] = 0.0
         a, b, c, d, _, _ = _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n,
-                                        eps_t, mu, cdamp, depth, width, dt, tau, f, fdamp,
-                                        work, False)
-        e_n += a
-        e_t += b
-        d_f += c
-        d_v += d
+                                        eps_t, mu, cdamp, depth, width, dt, tau, fp[k],
+                                        fdp[k], work, False)
+        w = counted[k]
+        e_n += w * a
+        e_t += w * b
+        d_f += w * c
+        d_v += w * d
     energy[0] = e_n
     energy[1] = e_t
     energy[2] = d_f
     energy[3] = d_v
+
+
+@njit(cache=True)
+def gather_pair_forces(fp, ptr, idx, f):
+    """f[2 i], f[2 i + 1] += Σ of the pair forces on node i [N], summed in the order
+    ``idx[ptr[i]:ptr[i + 1]]`` (rows of ``fp`` seen as (4 n_p, 2): 4 k + slot), which
+    :func:`pair_node_lists` makes the order of the pairs' keys: the same sum, to the
+    bit, on any number of ranks."""
+    f2 = fp.reshape(-1, 2)
+    for i in range(ptr.size - 1):
+        sx = 0.0
+        sy = 0.0
+        for e in range(ptr[i], ptr[i + 1]):
+            r = idx[e]
+            sx += f2[r, 0]
+            sy += f2[r, 1]
+        f[2 * i] += sx
+        f[2 * i + 1] += sy
+
+
+def pair_node_lists(pairs: np.ndarray, facets: np.ndarray, n_nodes: int):
+    """CSR lists (ptr (n_nodes + 1,), idx) of the pair-force rows (4 k + slot) on each of
+    the first ``n_nodes`` nodes, by pair index within a node (pairs are sorted by key)."""
+    nodes = np.c_[facets[pairs[:, 0]], facets[pairs[:, 1]]].ravel()
+    rows = np.arange(nodes.size, dtype=np.int64)
+    mine = nodes < n_nodes
+    nodes, rows = nodes[mine], rows[mine]
+    order = np.lexsort((rows, nodes))
+    ptr = np.zeros(n_nodes + 1, dtype=np.int64)
+    np.cumsum(np.bincount(nodes, minlength=n_nodes), out=ptr[1:])
+    return ptr, np.ascontiguousarray(rows[order], dtype=np.int64)
 
 
 @njit(cache=True)
@@ -515,7 +558,7 @@ def contact_damping(X, u, facets, fprev, fnext, pairs, facet_block, eps_n, depth
 
 @njit(cache=True)
 def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, depth,
-                        width, tau_c, tau, h, fbuf, work, rows, cols, vals):
+                        width, tau_c, tau, h, counted, fbuf, work, rows, cols, vals):
     """Consistent tangent −∂f/∂u of the pairs in contact, by central differences of
     :func:`_pair_forces` in each dof the pair's force depends on (its two facets' nodes
     and, through the corner rules, the far nodes of their neighbouring facets).
@@ -523,7 +566,8 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
     Static solver convention: ``v`` is the displacement since the last commit (dt = 1),
     so a perturbation of u perturbs v alike, and each evaluation starts from the
     committed history ``tau_c``; ``tau`` is left as it was. No damper acts (a static
-    state has no velocity). ``fbuf`` (2 n) must be zero on entry and is zero on exit.
+    state has no velocity). ``fbuf`` (8,) is scratch. Only the pairs ``counted`` (> 0)
+    enter: a pair across ranks is in the lists of both and computed by one.
 
     At the apex of the friction cone — facets touching with no normal traction, as the
     joints of a dry structure at its unloaded start — the force is not differentiable:
@@ -540,6 +584,8 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
     nodamp = np.zeros(pairs.shape[0])
     nent = 0
     for k in range(pairs.shape[0]):
+        if counted[k] <= 0.0:
+            continue
         t0 = tau[k, 0]
         t1 = tau[k, 1]
         tau[k, 0] = tau_c[k, 0]
@@ -553,9 +599,6 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
         nodes[1] = facets[fa, 1]
         nodes[2] = facets[fb, 0]
         nodes[3] = facets[fb, 1]
-        for j in range(4):
-            fbuf[2 * nodes[j]] = 0.0
-            fbuf[2 * nodes[j] + 1] = 0.0
         # a pair out of reach of the perturbations has no tangent; one that is not in
         # contact but within reach (touching, up to round-off) is treated as at the apex
         near = not _far_apart(X, u, facets, fa, fb, depth[k] + 4.0 * h)
@@ -585,17 +628,16 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
                         v[d] = v0 + sg * h
                         tau[k, 0] = tau_c[k, 0]
                         tau[k, 1] = tau_c[k, 1]
+                        fbuf[:] = 0.0
                         _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t,
                                      mu, nodamp, depth, width, 1.0, tau, fbuf, fbuf, work,
                                      stick)
                         for i in range(4):
                             for ci in range(2):
-                                di = 2 * nodes[i] + ci
                                 if side == 0:
-                                    fp[2 * i + ci] = fbuf[di]
+                                    fp[2 * i + ci] = fbuf[2 * i + ci]
                                 else:
-                                    fp[2 * i + ci] -= fbuf[di]
-                                fbuf[di] = 0.0
+                                    fp[2 * i + ci] -= fbuf[2 * i + ci]
                     u[d] = u0
                     v[d] = v0
                     for i in range(4):
@@ -610,11 +652,12 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
 
 
 @njit(cache=True)
-def block_moments(X, u, node_block, mass, out):
+def block_moments(X, u, node_block, mass, order, out):
     """out[b] = Σ m (X + u) [kg m] over the nodes of block b (zeroed first): the first
-    moments of the blocks' lumped masses at the current positions."""
+    moments of the blocks' lumped masses at the current positions, summed over the
+    nodes in ``order`` (their input order: the same sum on any number of ranks)."""
     out[:, :] = 0.0
-    for i in range(node_block.size):
+    for i in order:
         b = node_block[i]
         m = mass[2 * i]
         out[b, 0] += m * (X[i, 0] + u[2 * i])
@@ -735,9 +778,12 @@ def precompile() -> None:
     fprev = np.array([3, 0, 1, 2], dtype=np.int64)
     pairs = np.array([[0, 2]], dtype=np.int64)
     p1 = np.ones(1)
+    fp = np.zeros((1, 8))
     facet_facet_forces(X, u, u, facets, fprev, fnext, pairs, p1, p1, p1, p1, p1, 1.0, 1e-3,
-                       np.zeros((1, 2)), np.zeros(8), np.zeros(8), np.zeros(N_ENERGY),
+                       np.zeros((1, 2)), p1, fp, fp.copy(), np.zeros(N_ENERGY),
                        np.zeros(N_WORK))
+    ptr, idx = pair_node_lists(pairs, facets, 4)
+    gather_pair_forces(fp, ptr, idx, np.zeros(8))
     blk = np.zeros(4, dtype=np.int64)
     contact_damping(X, u, facets, fprev, fnext, pairs, blk, p1, p1, 1.0,
                     np.zeros(1, dtype=np.int64), np.zeros((1, 2), dtype=np.int64), p1, p1,
@@ -745,10 +791,10 @@ def precompile() -> None:
                     np.zeros(N_WORK))
     z = np.zeros((1, 2))
     facet_facet_tangent(X, u, u.copy(), facets, fprev, fnext, pairs, p1, p1, p1, p1, 1.0, z,
-                        z.copy(), 1e-6, np.zeros(8), np.zeros(N_WORK),
+                        z.copy(), 1e-6, p1, np.zeros(8), np.zeros(N_WORK),
                         np.zeros(128, dtype=np.int64), np.zeros(128, dtype=np.int64),
                         np.zeros(128))
     midpoint_work(u, u, u)
-    block_moments(X, u, np.zeros(4, dtype=np.int32), np.ones(8), np.zeros((1, 2)))
+    block_moments(X, u, np.zeros(4, dtype=np.int32), np.ones(8), np.arange(4), np.zeros((1, 2)))
     clipped_restitution(0.5, False)
     clipped_restitution(0.5, True)

@@ -220,6 +220,11 @@ class BlockContact(Interaction):
         self.tau = np.zeros((0, 2))
         self.tau_c = np.zeros((0, 2))
         self.keys = np.zeros(0, dtype=np.int64)
+        self.counted = np.zeros(0)
+        self.fp = np.zeros((0, 8))
+        self.fdp = np.zeros((0, 8))
+        self._gptr = np.zeros(model.n_nodes + 1, dtype=np.int64)
+        self._gidx = np.zeros(0, dtype=np.int64)
         # the committed history by key, as at the last commit (None before one): a
         # rebuild between commits (a failed Newton iterate far from the committed state)
         # may drop a pair that is in contact in the committed state; its history comes
@@ -292,8 +297,6 @@ class BlockContact(Interaction):
         self.X[nloc:] = model.blocks.x[ghost_nodes]
         self.u = np.zeros(2 * nn)
         self.v = np.zeros(2 * nn)
-        self.f = np.zeros(2 * nn)
-        self.fdamp = np.zeros(2 * nn)
         self.boxes = np.zeros((gids.size, 4))
         if comm.size > 1:
             # what this rank sends to r: the nodes of the facets r takes as ghosts,
@@ -403,13 +406,17 @@ class BlockContact(Interaction):
         m = self.model
         nb = m.blocks.n_blocks
         mass = m.mass[0 : 2 * m.n_nodes : 2]
+        # every sum over a block's nodes in their input order: the same on any number of
+        # ranks (a block lies on one rank; the others add zeros)
+        o = self._node_order = np.argsort(m.node_input, kind="stable").astype(np.int64)
         sums = np.zeros((nb, 3))
-        np.add.at(sums, m.node_block, np.c_[mass, mass[:, None] * m.X])
+        np.add.at(sums, m.node_block[o], np.c_[mass, mass[:, None] * m.X][o])
         sums = self.comm.allreduce(sums)
         self.block_mass = sums[:, 0]
         g = sums[:, 1:] / np.where(sums[:, :1] > 0, sums[:, :1], 1.0)
         inertia = np.zeros(nb)
-        np.add.at(inertia, m.node_block, mass * np.sum((m.X - g[m.node_block]) ** 2, axis=1))
+        np.add.at(inertia, m.node_block[o],
+                  (mass * np.sum((m.X - g[m.node_block]) ** 2, axis=1))[o])
         self.block_polar = self.comm.allreduce(inertia)
         self.centroid = np.ascontiguousarray(g)
         self._moments = np.zeros((nb, 2))
@@ -435,7 +442,8 @@ class BlockContact(Interaction):
     def _block_centroids(self, parallel: bool) -> None:
         """The blocks' current centroids [m] (collective in parallel; no allocation)."""
         m = self.model
-        K.block_moments(m.X, m.u.x.array, m.node_block, m.mass, self._moments)
+        K.block_moments(m.X, m.u.x.array, m.node_block, m.mass, self._node_order,
+                        self._moments)
         if parallel:
             self.comm.Allreduce(MPI.IN_PLACE, self._moments, op=MPI.SUM)
         np.divide(self._moments, self._mass_safe, out=self.centroid)
@@ -482,15 +490,18 @@ class BlockContact(Interaction):
         nc = self.n_candidates
         pairs = np.asarray(self_pairs(np.ascontiguousarray(self.boxes[:nc]),
                                       self.facet_block[:nc]), dtype=np.int64).reshape(-1, 2)
-        # each cross-rank pair is computed by the lower rank only; ghost-ghost never
+        # a cross-rank pair is in the lists of both ranks (each sums the forces on its
+        # own nodes over all their pairs, in the pairs' key order: the same sum as on one
+        # rank), counted in the energies and the tangent by the lower; ghost-ghost never
         ra = self.facet_rank[pairs[:, 0]]
         rb = self.facet_rank[pairs[:, 1]]
         me = comm.rank
-        keep = ((ra == me) & (rb == me)) | ((ra == me) & (rb > me)) | ((rb == me) & (ra > me))
-        pairs = pairs[keep]
+        keep = (ra == me) | (rb == me)
+        pairs, ra, rb = pairs[keep], ra[keep], rb[keep]
+        counted = np.minimum(ra, rb) == me
         both = (self.bonded_block[self.facet_block[pairs[:, 0]]]
                 & self.bonded_block[self.facet_block[pairs[:, 1]]])
-        pairs = pairs[~both]
+        pairs, counted = pairs[~both], counted[~both]
         # orient each pair by global facet id, so its two passes keep their meaning
         ga = self.ext_gid[pairs[:, 0]]
         gb = self.ext_gid[pairs[:, 1]]
@@ -500,7 +511,7 @@ class BlockContact(Interaction):
         keys = np.minimum(ga, gb) * n_g + np.maximum(ga, gb)
         if self.excluded.size and keys.size:
             free = ~np.isin(keys, self.excluded)
-            pairs, keys = pairs[free], keys[free]
+            pairs, keys, counted = pairs[free], keys[free], counted[free]
         hist = [np.zeros((pairs.shape[0], 2)) for _ in range(2)]
         # the trial history from the current pairs; the committed one from the last
         # commit's pairs when there was one (the current pair set may come from a
@@ -521,6 +532,12 @@ class BlockContact(Interaction):
         order = np.argsort(keys, kind="stable")
         self.pairs = np.ascontiguousarray(pairs[order])
         self.keys = keys[order]
+        self.counted = np.ascontiguousarray(counted[order], dtype=float)
+        # the pairs' forces on their nodes, and the lists that sum them into this rank's
+        self.fp = np.zeros((self.pairs.shape[0], 8))
+        self.fdp = np.zeros((self.pairs.shape[0], 8))
+        self._gptr, self._gidx = K.pair_node_lists(self.pairs, self.facets,
+                                                   self.n_local_nodes)
         self.tau, self.tau_c = (np.ascontiguousarray(h[order]) for h in hist)
         ma = self.facet_material[self.pairs[:, 0]]
         mb = self.facet_material[self.pairs[:, 1]]
@@ -580,15 +597,12 @@ class BlockContact(Interaction):
         and static solutions; collective)."""
         f, v, dt = state.f[BLOCKS], state.v[BLOCKS], state.dt
         self._sync(v)
-        self.f.fill(0.0)
         if state.static:  # backward Euler from the committed history
             self.tau[:] = self.tau_c
             dt = 1.0
         cdamp = self._no_damping
         live = state.damping and not state.static and self.zeta[0] > 0.0
-        parallel = self.exchange is not None and self.comm.size > 1
         if live:
-            self.fdamp.fill(0.0)
             self._block_centroids(self.comm.size > 1)
             K.contact_damping(
                 self.X, self.u, self.facets, self.fprev, self.fnext, self.pairs,
@@ -599,16 +613,14 @@ class BlockContact(Interaction):
         K.facet_facet_forces(
             self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
             self.eps_n, self.eps_t, self.mu, cdamp, self.depth, self.model.width, dt,
-            self.tau, self.f, self.fdamp, self.energy, self._work,
+            self.tau, self.counted, self.fp, self.fdp, self.energy, self._work,
         )
         nloc = 2 * self.n_local_nodes
-        f[:nloc] += self.f[:nloc]
-        if parallel:
-            self.exchange.reverse(self.f[nloc:].reshape(-1, 2), f[:nloc].reshape(-1, 2))
+        K.gather_pair_forces(self.fp, self._gptr, self._gidx, f)
         self.dissipated += self.energy[2]
-        self._account_dampers(live, parallel, v[:nloc], dt)
+        self._account_dampers(live, v[:nloc], dt)
 
-    def _account_dampers(self, live: bool, parallel: bool, v: np.ndarray, dt: float) -> None:
+    def _account_dampers(self, live: bool, v: np.ndarray, dt: float) -> None:
         """Add the dampers' dissipation of the step before: minus the work of their forces
         fd(n−1) over its midpoint increment (u(n) − u(n−2))/2, as the explicit solver
         counts work, so the energy account closes (evaluated with the velocity the damper
@@ -626,10 +638,8 @@ class BlockContact(Interaction):
         self._u1[:] = u_now
         self._fd_live = live
         if live:
-            self._fd[:] = self.fdamp[:nloc]
-            if parallel:
-                self.exchange.reverse(self.fdamp[nloc:].reshape(-1, 2),
-                                      self._fd.reshape(-1, 2))
+            self._fd.fill(0.0)
+            K.gather_pair_forces(self.fdp, self._gptr, self._gidx, self._fd)
 
     def add_tangent(self, tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the pairs in contact into ``tangent`` (the
@@ -641,11 +651,11 @@ class BlockContact(Interaction):
         rows = np.empty(128 * n, dtype=np.int64)
         cols = np.empty(128 * n, dtype=np.int64)
         vals = np.empty(128 * n)
-        fbuf = np.zeros_like(self.f)
+        fbuf = np.zeros(8)
         nent = K.facet_facet_tangent(
             self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
             self.eps_n, self.eps_t, self.mu, self.depth, self.model.width, self.tau_c,
-            self.tau, self.fd_step, fbuf, self._work, rows, cols, vals)
+            self.tau, self.fd_step, self.counted, fbuf, self._work, rows, cols, vals)
         tangent.add(self._ext_dofs[rows[:nent]], self._ext_dofs[cols[:nent]], vals[:nent])
 
     @property
@@ -707,6 +717,6 @@ class BlockContact(Interaction):
                 K._pass_zone(self.X, self.u, self.facets, self.fprev, self.fnext, fs, fm,
                              self.depth[k], self._work)
                 active[k] |= self._work[K.Z_ACTIVE] > 0
-        mine = self.ext_gid[self.pairs[active]].reshape(-1, 2)
+        mine = self.ext_gid[self.pairs[active & (self.counted > 0)]].reshape(-1, 2)
         allp = np.concatenate(self.comm.allgather(mine))
         return allp[np.lexsort((allp[:, 1], allp[:, 0]))] if allp.size else allp
