@@ -29,7 +29,7 @@ __all__ = [
 
 def precompile() -> None:
     """Compile and cache the kernels of every interaction."""
-    from masonry_fdem.interactions import anchors, contact, disks, joints, search
+    from masonry_fdem.interactions import _sums, anchors, contact, disks, joints, search
 
-    for package in (search, contact, joints, disks, anchors):
+    for package in (_sums, search, contact, joints, disks, anchors):
         package.precompile()

@@ -366,8 +366,8 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
 def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
                        width, dt, tau, counted, fp, fdp, energy, work):
     """Penalty normal, viscous normal and Coulomb friction forces of all candidate pairs,
-    pair by pair (summed into the nodes by :func:`gather_pair_forces`, in an order that
-    does not depend on how the blocks are spread over ranks).
+    pair by pair (summed into the nodes by :func:`masonry_fdem.interactions._sums.gather_rows`,
+    in an order that does not depend on how the blocks are spread over ranks).
 
     Args:
         eps_n, eps_t, mu, depth: (n_p,) normal and tangential penalty [Pa/m], friction
@@ -408,37 +408,6 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
     energy[1] = e_t
     energy[2] = d_f
     energy[3] = d_v
-
-
-@njit(cache=True)
-def gather_pair_forces(fp, ptr, idx, f):
-    """f[2 i], f[2 i + 1] += Σ of the pair forces on node i [N], summed in the order
-    ``idx[ptr[i]:ptr[i + 1]]`` (rows of ``fp`` seen as (4 n_p, 2): 4 k + slot), which
-    :func:`pair_node_lists` makes the order of the pairs' keys: the same sum, to the
-    bit, on any number of ranks."""
-    f2 = fp.reshape(-1, 2)
-    for i in range(ptr.size - 1):
-        sx = 0.0
-        sy = 0.0
-        for e in range(ptr[i], ptr[i + 1]):
-            r = idx[e]
-            sx += f2[r, 0]
-            sy += f2[r, 1]
-        f[2 * i] += sx
-        f[2 * i + 1] += sy
-
-
-def pair_node_lists(pairs: np.ndarray, facets: np.ndarray, n_nodes: int):
-    """CSR lists (ptr (n_nodes + 1,), idx) of the pair-force rows (4 k + slot) on each of
-    the first ``n_nodes`` nodes, by pair index within a node (pairs are sorted by key)."""
-    nodes = np.c_[facets[pairs[:, 0]], facets[pairs[:, 1]]].ravel()
-    rows = np.arange(nodes.size, dtype=np.int64)
-    mine = nodes < n_nodes
-    nodes, rows = nodes[mine], rows[mine]
-    order = np.lexsort((rows, nodes))
-    ptr = np.zeros(n_nodes + 1, dtype=np.int64)
-    np.cumsum(np.bincount(nodes, minlength=n_nodes), out=ptr[1:])
-    return ptr, np.ascontiguousarray(rows[order], dtype=np.int64)
 
 
 @njit(cache=True)
@@ -782,8 +751,6 @@ def precompile() -> None:
     facet_facet_forces(X, u, u, facets, fprev, fnext, pairs, p1, p1, p1, p1, p1, 1.0, 1e-3,
                        np.zeros((1, 2)), p1, fp, fp.copy(), np.zeros(N_ENERGY),
                        np.zeros(N_WORK))
-    ptr, idx = pair_node_lists(pairs, facets, 4)
-    gather_pair_forces(fp, ptr, idx, np.zeros(8))
     blk = np.zeros(4, dtype=np.int64)
     contact_damping(X, u, facets, fprev, fnext, pairs, blk, p1, p1, 1.0,
                     np.zeros(1, dtype=np.int64), np.zeros((1, 2), dtype=np.int64), p1, p1,

@@ -28,6 +28,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from masonry_fdem.interactions._sums import gather_rows, node_lists
 from masonry_fdem.interactions.contact import _kernels as K
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.interactions.search import facet_boxes, max_speed, self_pairs
@@ -536,8 +537,9 @@ class BlockContact(Interaction):
         # the pairs' forces on their nodes, and the lists that sum them into this rank's
         self.fp = np.zeros((self.pairs.shape[0], 8))
         self.fdp = np.zeros((self.pairs.shape[0], 8))
-        self._gptr, self._gidx = K.pair_node_lists(self.pairs, self.facets,
-                                                   self.n_local_nodes)
+        self._gptr, self._gidx = node_lists(
+            np.c_[self.facets[self.pairs[:, 0]], self.facets[self.pairs[:, 1]]],
+            self.n_local_nodes)
         self.tau, self.tau_c = (np.ascontiguousarray(h[order]) for h in hist)
         ma = self.facet_material[self.pairs[:, 0]]
         mb = self.facet_material[self.pairs[:, 1]]
@@ -616,7 +618,7 @@ class BlockContact(Interaction):
             self.tau, self.counted, self.fp, self.fdp, self.energy, self._work,
         )
         nloc = 2 * self.n_local_nodes
-        K.gather_pair_forces(self.fp, self._gptr, self._gidx, f)
+        gather_rows(self.fp, self._gptr, self._gidx, f)
         self.dissipated += self.energy[2]
         self._account_dampers(live, v[:nloc], dt)
 
@@ -639,7 +641,7 @@ class BlockContact(Interaction):
         self._fd_live = live
         if live:
             self._fd.fill(0.0)
-            K.gather_pair_forces(self.fdp, self._gptr, self._gidx, self._fd)
+            gather_rows(self.fdp, self._gptr, self._gidx, self._fd)
 
     def add_tangent(self, tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the pairs in contact into ``tangent`` (the

@@ -406,7 +406,8 @@ def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
 
 
 @njit(cache=True)
-def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, s1, f, energy):
+def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, counted, s0, s1, fq,
+                 energy):
     """Forces of all bonded integration points (trial state from the committed one).
 
     Args:
@@ -419,35 +420,31 @@ def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, s0, s1, f, en
         ipmat: (m,) joint material row in ``props``.
         props: (k, N_PROPS) material properties.
         alive: (m,) int8, 0 for points handed over to contact.
+        counted: (m,) weight of each point in ``energy`` (1; 0 for the copy of a point
+            another rank counts).
         s0, s1: (m, N_STATE) committed and trial state.
-        f: (2n,) forces [N], added to.
+        fq: (m, 8) forces of each point [N] on a0, a1, b0, b1 (x, y), written (summed
+            into the nodes by :func:`masonry_fdem.interactions._sums.gather_rows`).
         energy: (2,) elastic energy stored and total dissipated energy [J] (written).
     """
     e_el = 0.0
     e_dis = 0.0
-    fl = np.empty(8)
     for q in range(ipa.shape[0]):
         if alive[q] == 0:
-            e_dis += w[q] * s0[q, S_DISS]
+            for j in range(8):
+                fq[q, j] = 0.0
+            e_dis += counted[q] * w[q] * s0[q, S_DISS]
             continue
         p = props[ipmat[q]]
         a0 = ipa[q, 0]
         a1 = ipa[q, 1]
         b0 = ipb[q, 0]
         b1 = ipb[q, 1]
-        point_forces(X, u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q], fl)
-        f[2 * a0] += fl[0]
-        f[2 * a0 + 1] += fl[1]
-        f[2 * a1] += fl[2]
-        f[2 * a1 + 1] += fl[3]
-        f[2 * b0] += fl[4]
-        f[2 * b0 + 1] += fl[5]
-        f[2 * b1] += fl[6]
-        f[2 * b1 + 1] += fl[7]
+        point_forces(X, u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q], fq[q])
         sn = s1[q, S_SN]
         ts = s1[q, S_TS]
-        e_el += 0.5 * w[q] * (sn * sn / p[P_KN] + ts * ts / p[P_KS])
-        e_dis += w[q] * s1[q, S_DISS]
+        e_el += counted[q] * 0.5 * w[q] * (sn * sn / p[P_KN] + ts * ts / p[P_KS])
+        e_dis += counted[q] * w[q] * s1[q, S_DISS]
     energy[E_ELASTIC] = e_el
     energy[E_DISSIPATED] = e_dis
 
@@ -628,7 +625,7 @@ def precompile() -> None:
     s1 = empty_state(1)
     alive = np.ones(1, dtype=np.int8)
     joint_forces(X, u, ip, ip[:, ::-1].copy(), half, half, half, np.zeros(1, np.int64),
-                 props, alive, s0, s1, np.zeros(8), np.zeros(2))
+                 props, alive, np.ones(1), s0, s1, np.zeros((1, 8)), np.zeros(2))
     joint_tangent(X, u, ip, ip[:, ::-1].copy(), half, half, half, np.zeros(1, np.int64),
                   props, alive, s0, FD_STEP, np.zeros(64, np.int64), np.zeros(64, np.int64),
                   np.zeros(64))

@@ -26,8 +26,11 @@ has slid by more than half its length (there the two contacts agree when the con
 penalty equals the joint's k_n). While a segment is bonded, the block contact ignores its
 facet pair.
 
-Parallel: every rank knows every segment; a segment is computed by the rank holding the
-block of its lower facet id, and the nodes of the other facet are exchanged every step.
+Parallel: every rank knows every segment; a segment is evaluated by every rank holding one
+of its two blocks (the nodes of the other side exchanged every step), and each rank sums
+the forces on its own nodes over their points in global order — the same sums, to the
+bit, on any number of ranks. The rank of the block of its lower facet id counts it (in
+the energies, the tangent and the hand-over to the contact).
 
 Consistent tangent (``add_tangent``, static Newton solver): per integration point, central
 differences of the point's own force kernel in its 8 dofs, at the committed history (a
@@ -49,6 +52,7 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.geometry.blockmesh import unit_name
+from masonry_fdem.interactions._sums import gather_rows, node_lists
 from masonry_fdem.interactions.joints import _kernels as JK
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tangent
 
@@ -345,14 +349,23 @@ class Joints(Interaction):
         self.g_w = np.repeat(0.5 * self.seg_length, 2) * model.width
         self.g_mat = seg_mat[q_seg]
         self.q_seg = q_seg
-        # ---- this rank's points: those whose side-A block it holds
+        # ---- this rank's points: those of the segments with a block here, in global
+        # order; a segment across ranks is held and evaluated by both (each sums the
+        # forces on its own nodes over all their points in that order: the same sum
+        # as on one rank), counted in the energies, the tangent and the hand-over by
+        # the rank of its side-A block (seg_rank)
         block_rank = model.block_ranks()
         self.seg_rank = block_rank[fblock[fa]]
-        own_seg = self.seg_rank == comm.rank
+        own_seg = (self.seg_rank == comm.rank) | (block_rank[fblock[fb]] == comm.rank)
         self.local_seg = np.flatnonzero(own_seg)
         self.local_ip = np.flatnonzero(own_seg[q_seg])
+        self.counted = np.ascontiguousarray(
+            self.seg_rank[q_seg[self.local_ip]] == comm.rank, dtype=float)
+        self._counted_i8 = self.counted.astype(np.int8)
         self._setup_nodes(block_rank)
         m = self.local_ip.size
+        self.fq = np.zeros((m, 8))
+        self._gptr, self._gidx = node_lists(np.c_[self.ipa, self.ipb], self.n_local_nodes)
         self.xia = np.ascontiguousarray(self.g_xia[self.local_ip])
         self.xib = np.ascontiguousarray(self.g_xib[self.local_ip])
         self.w = np.ascontiguousarray(self.g_w[self.local_ip])
@@ -380,11 +393,12 @@ class Joints(Interaction):
         in2loc = np.full(blocks.n_nodes, -1, dtype=np.int64)
         in2loc[model.node_input] = np.arange(nloc)
         node_rank = block_rank[blocks.node_block]
-        # ghosts: side-B nodes of my points held by other ranks, by owner, sorted
+        # ghosts: nodes of my points held by other ranks, by owner, sorted
         recv = []
-        mine_b = np.unique(self.g_ipb[self.local_ip])
+        mine = np.unique(np.r_[self.g_ipa[self.local_ip].ravel(),
+                               self.g_ipb[self.local_ip].ravel()])
         for r in range(comm.size):
-            recv.append(mine_b[node_rank[mine_b] == r] if r != comm.rank
+            recv.append(mine[node_rank[mine] == r] if r != comm.rank
                         else np.zeros(0, np.int64))
         ghosts = np.concatenate(recv) if recv else np.zeros(0, np.int64)
         node_map = in2loc.copy()
@@ -409,8 +423,10 @@ class Joints(Interaction):
                 if r == comm.rank:
                     send.append(np.zeros(0, np.int64))
                     continue
-                theirs = self.seg_rank[self.q_seg] == r
-                nb = np.unique(self.g_ipb[theirs])
+                # r's points: those of the segments with a block on r
+                fb_rank = node_rank[self.g_ipb[:, 0]]
+                theirs = (self.seg_rank[self.q_seg] == r) | (fb_rank == r)
+                nb = np.unique(np.r_[self.g_ipa[theirs].ravel(), self.g_ipb[theirs].ravel()])
                 nb = nb[node_rank[nb] == comm.rank]
                 send.append(in2loc[nb])
             self.exchange = NodeExchange(comm, send, [len(g) for g in recv])
@@ -448,13 +464,10 @@ class Joints(Interaction):
         if self.exchange is not None:
             self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
             self.u[nloc:] = self._ghost_u.ravel()
-        self.f.fill(0.0)
         JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
-                        self.ipmat, self.props, self.alive, self.s0, self.s1, self.f,
-                        self.energy)
-        f[:nloc] += self.f[:nloc]
-        if self.exchange is not None:
-            self.exchange.reverse(self.f[nloc:].reshape(-1, 2), f[:nloc].reshape(-1, 2))
+                        self.ipmat, self.props, self.alive, self.counted, self.s0, self.s1,
+                        self.fq, self.energy)
+        gather_rows(self.fq, self._gptr, self._gidx, f)
 
     def add_tangent(self, K: Tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the live integration points into ``K``
@@ -468,7 +481,8 @@ class Joints(Interaction):
         cols = np.empty(64 * m, dtype=np.int64)
         vals = np.empty(64 * m)
         nent = JK.joint_tangent(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib,
-                                self.w, self.ipmat, self.props, self.alive, self.s0,
+                                self.w, self.ipmat, self.props,
+                                self.alive * self._counted_i8, self.s0,
                                 JK.FD_STEP, rows, cols, vals)
         dofs = K.node_dofs(self.ext_input)
         K.add(dofs[rows[:nent]], dofs[cols[:nent]], vals[:nent])
@@ -484,7 +498,8 @@ class Joints(Interaction):
             self.u[nloc:] = self._ghost_u.ravel()
         g = np.zeros_like(self.f)
         d = JK.dissipation_gradient(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib,
-                                    self.w, self.ipmat, self.props, self.alive, self.s0,
+                                    self.w, self.ipmat, self.props,
+                                    self.alive * self._counted_i8, self.s0,
                                     JK.FD_STEP, g)
         out = np.zeros(state.u[BLOCKS].size)
         out[:nloc] = g[:nloc]
