@@ -1,18 +1,22 @@
-"""``masonry-fdem``: the command line for the standard workflows.
+"""masonry-fdem: the command line for the standard workflows.
 
 Subcommands:
 
-* ``masonry-fdem info MESH.msh`` — blocks, materials and cells of a user mesh;
-* ``masonry-fdem settle MESH.msh --material brick=2000,5e9,0.2 --fix-below 0.0`` — bring
-  the blocks to equilibrium under self-weight by dynamic relaxation and write the
-  history CSV, ParaView files and a picture to ``--out``;
-* ``masonry-fdem assess CASE.toml`` — load a masonry arch to collapse (see
-  :mod:`masonry_fdem.assessment.assess`); the run folder gets a report; ``masonry-fdem example``
-  prints the reference case file;
-* ``masonry-fdem repair CASE.toml`` — the same arch unstrengthened and with the case's
-  ``[[anchors]]``, side by side in one report, and/or a search for an efficient anchor
-  layout over the case's ``[search]`` table (see :mod:`masonry_fdem.assessment.repair`);
-* ``masonry-fdem precompile`` — compile the numba kernels before an MPI run.
+  info MESH.msh         blocks, materials and cells of a user mesh
+  settle MESH.msh       bring the blocks to equilibrium under self-weight by dynamic
+                        relaxation, with contact between the blocks and bonded joints
+                        where the mesh has named interface lines (--joint); writes the
+                        history CSV, ParaView files and a picture to --out
+  assess CASE.toml      load a masonry arch to collapse; the run folder gets a report
+  repair CASE.toml      the same arch unstrengthened and with the case's [[anchors]],
+                        side by side in one report, and/or a search for an efficient
+                        anchor layout over the case's [search] table
+  example               print the reference case file
+  precompile            compile the numba kernels before an MPI run
+
+Every subcommand takes -v (more messages, -vv for debugging) and -q (no progress
+output, warnings and errors only). Units are SI (m, N, Pa, kg/m^3) unless an option
+says otherwise. Run "masonry-fdem SUBCOMMAND --help" for the options of one subcommand.
 """
 
 from __future__ import annotations
@@ -38,6 +42,37 @@ def _material(text: str):
     return name, Material(rho, E, nu)
 
 
+def _joint(text: str):
+    from dataclasses import fields
+
+    from masonry_fdem.interactions import JointMaterial
+
+    name, _, values = text.partition(":")
+    known = {f.name for f in fields(JointMaterial)}
+    kw = {}
+    try:
+        if not name or not values:
+            raise ValueError
+        if values.strip() != "dry":
+            for item in values.split(","):
+                key, value = item.split("=", 1)
+                key = key.strip()
+                if key not in known:
+                    raise argparse.ArgumentTypeError(
+                        f"joint {text!r}: unknown property {key!r} (known: "
+                        f"{', '.join(sorted(known))})")
+                kw[key] = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"joint {text!r}: expected GROUP:key=value,... (JointMaterial properties in SI "
+            "units, e.g. bed:ft=1e5,GfI=10,c=1.5e5,GfII=50,tan_phi=0.75) or GROUP:dry"
+        ) from None
+    try:
+        return name, (JointMaterial(**kw) if kw else None)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"joint {text!r}: {exc}") from None
+
+
 def _read(args, comm):
     from masonry_fdem.geometry import read_msh
 
@@ -57,32 +92,60 @@ def cmd_info(args) -> int:
 
 
 def cmd_settle(args) -> int:
+    import math
+
     from mpi4py import MPI
 
     import numpy as np
 
     from masonry_fdem import Model
-    from masonry_fdem.io import History, VTXOutput, plot_blocks
+    from masonry_fdem.geometry import interface_rules, read_msh_lines
+    from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
+    from masonry_fdem.io import History, ProgressBar, VTXOutput, plot_blocks
     from masonry_fdem.solvers import DynamicRelaxation
 
     comm = MPI.COMM_WORLD
     blocks = _read(args, comm)
     materials = dict(args.material or [])
+    missing = sorted(set(blocks.material_names) - set(materials))
+    if missing:
+        raise ValueError(f"{args.mesh}: no --material for {missing} (materials of the mesh: "
+                         f"{', '.join(blocks.material_names)})")
     model = Model(blocks, materials, hypothesis=args.hypothesis, width=args.width, comm=comm)
     model.fix(lambda X: X[1] <= args.fix_below + 1e-9, name="base")
     model.add_gravity(live=True)
-    dr = DynamicRelaxation(model, rtol=args.rtol)
+    # blocks rest on each other and on the fixed base through contact (Coulomb friction);
+    # interfaces on the mesh's physical line groups named by --joint get those joints
+    contact = BlockContact(model, ContactSettings(friction=args.friction))
+    inter = [contact]
+    joints = None
+    if args.joint:
+        lines = read_msh_lines(args.mesh, comm=comm)
+        names = blocks.material_names
+        dry = {(a, b): None for a in names for b in names}
+        joints = Joints(model, dry, where=interface_rules(lines, dict(args.joint)),
+                        contact=contact)
+        inter.append(joints)
+    dr = DynamicRelaxation(model, interactions=inter, rtol=args.rtol, ke_tol=math.inf,
+                           max_iter=args.max_iterations, damping="velocity")
     out = Path(args.out)
-    with History(out / "history.csv", comm) as hist, VTXOutput(model, out) as vtx:
+    bar = ProgressBar("settle", comm=comm) if args.verbosity >= 0 else None
+    with History(out / "history.csv", comm) as hist, VTXOutput(model, out, joints=joints) as vtx:
         for lf in np.linspace(1.0 / args.steps, 1.0, args.steps):
             res = dr.solve(lf)
             hist.append({"load_factor": lf, "iterations": res.iterations,
                          "residual": res.relative_residual,
                          "reaction": dr.reactions()["base"]})
             vtx.write(float(lf))
+            if bar is not None:
+                bar.increment(load=f"{lf:.2f} x self-weight", iterations=res.iterations)
             if not res.converged:
                 break
-    plot_blocks(model, out / "settled.png", field="von_mises", scale=args.scale)
+    if bar is not None:
+        bar.close()
+    plot_blocks(model, out / "settled.png", field="von_mises", scale=args.scale,
+                joints=joints, title=f"{Path(args.mesh).name} under self-weight "
+                                     f"(displacements ×{args.scale:g})")
     if comm.rank == 0:
         state = "in equilibrium" if dr.results[-1].converged else "NOT in equilibrium"
         print(f"{state} after {sum(r.iterations for r in dr.results)} iterations; "
@@ -101,7 +164,7 @@ def cmd_assess(args) -> int:
     case = load_case(args.case)  # every problem of the file, before anything is written
     try:
         res = assess(case, out=args.out, overwrite=args.overwrite,
-                     progress=False if args.quiet else None, comm=comm)
+                     progress=_progress(args), comm=comm)
     except RuntimeError as exc:  # no equilibrium under self-weight, a folder not written
         if comm.rank == 0:
             print(f"masonry-fdem: {exc}", file=sys.stderr)
@@ -139,7 +202,7 @@ def cmd_repair(args) -> int:
                         "unstrengthened arch) nor [search] (a layout search)",
                         str(args.case))
     out = Path(args.out) if args.out is not None else case.analysis.output
-    progress = False if args.quiet else None
+    progress = False if args.verbosity < 0 else None
     try:
         if case.anchor_specs:
             done = (out / "comparison" / "report.md").is_file()
@@ -157,7 +220,7 @@ def cmd_repair(args) -> int:
                     print(f"report: {res.report.resolve()}")
         if case.search is not None:
             def tick(info):
-                if comm.rank == 0 and not args.quiet:
+                if comm.rank == 0 and args.verbosity >= 0:
                     print(f"  {info['level']}: {info['done']}/{info['total']} layouts run",
                           file=sys.stderr)
 
@@ -192,6 +255,14 @@ def cmd_repair(args) -> int:
     return 0
 
 
+def _progress(args):
+    """Progress of `assess`: none with -q; a bar when stdout is a terminal; otherwise one
+    line per increment on stdout (a log, a pipe, a batch job)."""
+    if args.verbosity < 0:
+        return False
+    return "bar" if sys.stdout.isatty() else "lines"
+
+
 def cmd_example(args) -> int:
     from masonry_fdem.assessment.case import EXAMPLE_CASE, REPAIR_EXAMPLE
 
@@ -207,42 +278,111 @@ def cmd_precompile(args) -> int:
     return 0
 
 
+def _version() -> str:
+    try:
+        from importlib.metadata import PackageNotFoundError, version
+
+        return version("masonry_fdem")
+    except (ImportError, PackageNotFoundError):
+        from masonry_fdem import __version__
+
+        return __version__
+
+
+_VERBOSITY_EPILOG = ("-v: more messages (-vv: debugging); -q: no progress output, "
+                     "warnings and errors only.")
+
+
+def _verbosity_args(q: argparse.ArgumentParser, main: bool) -> None:
+    """-v/-q; on a subcommand they default to "not given" so the main parser's stay."""
+    default = 0 if main else argparse.SUPPRESS
+    g = q.add_argument_group("output")
+    g.add_argument("-v", "--verbose", action="count", default=default,
+                   help="more messages: -v informs of each stage, -vv debugs")
+    g.add_argument("-q", "--quiet", action="store_true", default=False if main else
+                   argparse.SUPPRESS,
+                   help="no progress bar or progress lines; only warnings and errors")
+
+
+def _sub(sub, name: str, help: str, description: str) -> argparse.ArgumentParser:
+    q = sub.add_parser(name, help=help, description=description, epilog=_VERBOSITY_EPILOG,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    _verbosity_args(q, main=False)
+    return q
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="masonry-fdem", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("-v", "--verbose", action="store_true")
-    sub = p.add_subparsers(dest="command", required=True)
+    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}",
+                   help="print the version of masonry_fdem and exit")
+    _verbosity_args(p, main=True)
+    sub = p.add_subparsers(dest="command", required=True, metavar="SUBCOMMAND")
 
     def mesh_args(q):
         q.add_argument("mesh", type=Path, help="Gmsh .msh file (2D)")
         q.add_argument("--blocks", choices=["physical", "components"], default="physical",
                        help="one block per physical surface or per connected component")
 
-    q = sub.add_parser("info", help="describe a mesh")
+    q = _sub(sub, "info", "describe a mesh",
+             "Print the blocks, materials, cells and area of a Gmsh mesh (.msh) as\n"
+             "masonry_fdem reads it.")
     mesh_args(q)
     q.set_defaults(func=cmd_info)
-    q = sub.add_parser("settle", help="equilibrium under self-weight (dynamic relaxation)")
+    q = _sub(sub, "settle", "equilibrium under self-weight (dynamic relaxation)",
+             "Bring the blocks of a Gmsh mesh to equilibrium under their self-weight by\n"
+             "dynamic relaxation in load increments. The nodes at or below --fix-below are\n"
+             "fixed (the base); the blocks rest on each other and on the base through\n"
+             "frictional contact. Interfaces on a physical line group (1D) of the mesh get\n"
+             "the joint material given for that group with --joint; the other interfaces\n"
+             "are dry contact. Writes history.csv, ParaView files (.bp, and .vtu with a\n"
+             ".pvd collection) and settled.png to --out.")
     mesh_args(q)
-    q.add_argument("--material", type=_material, action="append", metavar="NAME=RHO,E,NU")
+    q.add_argument("--material", type=_material, action="append", metavar="NAME=RHO,E,NU",
+                   help="a block material: density [kg/m^3], Young's modulus [Pa], "
+                        "Poisson's ratio (repeat for each material of the mesh)")
+    q.add_argument("--joint", type=_joint, action="append", metavar="GROUP:KEY=VALUE,...",
+                   help="the joint material of the interfaces on the physical line group "
+                        "GROUP: JointMaterial properties in SI units, e.g. "
+                        "bed:ft=1e5,GfI=10,c=1.5e5,GfII=50,tan_phi=0.75; GROUP:dry for "
+                        "contact only (repeat for each group)")
+    q.add_argument("--friction", type=float, default=0.6,
+                   help="Coulomb friction coefficient of the contact between blocks "
+                        "(default 0.6)")
     q.add_argument("--hypothesis", choices=["plane_stress", "plane_strain"],
                    default="plane_stress")
     q.add_argument("--width", type=float, default=1.0, help="out-of-plane width [m]")
     q.add_argument("--fix-below", type=float, default=0.0,
-                   help="nodes with y <= this are fixed [m]")
-    q.add_argument("--steps", type=int, default=5, help="load increments")
-    q.add_argument("--rtol", type=float, default=1e-6)
-    q.add_argument("--scale", type=float, default=100.0, help="picture magnification")
-    q.add_argument("--out", default="out_settle")
+                   help="nodes with y <= this are fixed [m] (default 0)")
+    q.add_argument("--steps", type=int, default=5, help="load increments (default 5)")
+    q.add_argument("--rtol", type=float, default=1e-6,
+                   help="out-of-balance force tolerance, relative (default 1e-6)")
+    q.add_argument("--max-iterations", type=int, default=200_000,
+                   help="dynamic relaxation iterations per increment (default 200000)")
+    q.add_argument("--scale", type=float, default=100.0,
+                   help="displacement magnification of the picture (default 100)")
+    q.add_argument("--out", default="out_settle", help="output folder (default out_settle)")
     q.set_defaults(func=cmd_settle)
-    q = sub.add_parser("assess", help="load an arch case to collapse; report in a run folder")
-    q.add_argument("case", type=Path, help="case file (TOML; `masonry-fdem example`)")
+    q = _sub(sub, "assess", "load an arch case to collapse; report in a run folder",
+             "Load the masonry arch of a case file (TOML) to collapse and write a run\n"
+             "folder with the report, the load-displacement curve, pictures and ParaView\n"
+             "files. The case file format: masonry-fdem example.\n\n"
+             "Progress: on a terminal, a bar that counts the load increments with the load\n"
+             "[kN] and the load-line displacement [mm]; when stdout is not a terminal (a\n"
+             "log file, a pipe), one line per increment: load factor (the load over the\n"
+             "limit-analysis load, - without limit analysis), load [kN], displacement\n"
+             "[mm], dynamic relaxation or Newton iterations, status.")
+    q.add_argument("case", type=Path, help="case file (TOML; masonry-fdem example)")
     q.add_argument("--out", type=Path, default=None,
                    help="run folder (default: analysis.output of the case)")
     q.add_argument("--overwrite", action="store_true", help="reuse a non-empty run folder")
-    q.add_argument("--quiet", action="store_true", help="no progress bar")
     q.set_defaults(func=cmd_assess)
-    q = sub.add_parser("repair", help="unstrengthened against anchored, and/or an anchor "
-                       "layout search ([search]); reports in a run folder")
+    q = _sub(sub, "repair", "unstrengthened against anchored, and/or an anchor "
+             "layout search ([search]); reports in a run folder",
+             "Assess the arch of a case file unstrengthened and with its [[anchors]], side\n"
+             "by side in one report (comparison/), and/or search for an efficient anchor\n"
+             "layout over the case's [search] table (search/). The case file format:\n"
+             "masonry-fdem example --repair.")
     q.add_argument("case", type=Path, help="case file (TOML) with [[anchors]] and/or [search]")
     q.add_argument("--out", type=Path, default=None,
                    help="run folder (default: analysis.output of the case); it gets "
@@ -252,21 +392,26 @@ def build_parser() -> argparse.ArgumentParser:
                    help="go on with an interrupted search (its journal) in the folder")
     q.add_argument("--group-size", type=int, default=1,
                    help="MPI ranks per layout run of the search (default 1)")
-    q.add_argument("--quiet", action="store_true", help="no progress output")
     q.set_defaults(func=cmd_repair)
-    q = sub.add_parser("example", help="print the reference case file")
+    q = _sub(sub, "example", "print the reference case file",
+             "Print the reference case file (TOML) of an arch assessment, with every key\n"
+             "explained, to start a case from: masonry-fdem example > case.toml")
     q.add_argument("--repair", action="store_true",
-                   help="the reference case with anchors, for `masonry-fdem repair`")
+                   help="the reference case with anchors, for masonry-fdem repair")
     q.set_defaults(func=cmd_example)
-    q = sub.add_parser("precompile", help="compile the numba kernels")
+    q = _sub(sub, "precompile", "compile the numba kernels",
+             "Compile (and cache) the numba kernels once, so that the ranks of an MPI run\n"
+             "do not all compile them at the same time.")
     q.set_defaults(func=cmd_precompile)
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
-                        format="%(name)s: %(message)s")
+    args.verbosity = -1 if args.quiet else int(args.verbose)
+    level = {-1: logging.WARNING, 0: logging.WARNING, 1: logging.INFO}.get(
+        args.verbosity, logging.DEBUG)
+    logging.basicConfig(level=level, format="%(name)s: %(message)s")
     try:
         return args.func(args)
     except (FileNotFoundError, ValueError) as exc:

@@ -65,7 +65,7 @@ import numpy as np
 from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
 from masonry_fdem.assessment.specs import SPREADER, classify_interface
 from masonry_fdem.geometry.arches import arch_centre, arch_parameter
-from masonry_fdem.assessment.report import write_run_folder
+from masonry_fdem.assessment.report import thrust_lines, write_run_folder
 from masonry_fdem.io.rundir import run_folder_problem
 from masonry_fdem.solvers.status import RunStatus, Status
 
@@ -170,6 +170,9 @@ class Assessment:
     stopped_under: str = "load"
     anchor_peaks: list[dict] = field(default_factory=list)
     ring_separation: list[dict] = field(default_factory=list)
+    #: the limit analysis's line of thrust: per ring, the points [m] where the resultant
+    #: crosses each radial joint, springing to springing (empty without limit analysis)
+    limit_thrust: list[list[tuple[float, float]]] = field(default_factory=list)
 
     @property
     def collapse_load(self) -> float | None:
@@ -490,7 +493,7 @@ def assess(
     *,
     out: str | Path | None = None,
     overwrite: bool = False,
-    progress: bool | None = None,
+    progress: bool | str | None = None,
     comm: MPI.Comm = MPI.COMM_WORLD,
     write: bool = True,
     callback: Callable[[dict], None] | None = None,
@@ -501,7 +504,11 @@ def assess(
         case: an :class:`~masonry_fdem.assessment.case.ArchCase`, a TOML file or a dict of one.
         out: the run folder (default: the case's ``analysis.output``).
         overwrite: allow a run folder that exists and is not empty.
-        progress: draw a progress bar on stderr (default: when stderr is a terminal).
+        progress: progress of rank 0: ``"bar"`` or True, a tqdm bar on stderr that counts
+            the increments (True: even when stderr is not a terminal); ``"lines"``,
+            one line per increment on stdout (load factor = load / limit-analysis
+            load, load [kN], load-line displacement [mm], iterations, status);
+            False, none; None (default), the bar when stderr is a terminal.
         comm: MPI communicator.
         write: write the run folder (False: compute only).
         callback: called on every rank after each converged step with
@@ -543,9 +550,13 @@ def assess(
     monitor = _JointMonitor(case, model, next((i for i in inter if i.name == "joints"), None))
     rings = _RingMonitor(case, model)
     points = case.load_points()
-    bar = ProgressBar(f"{case.name}", comm=comm,
-                      force=bool(progress)) if progress is not False else None
-    scale = limit_load or ld.max_load or 20 * ld.increment
+    bar = None
+    if progress is not False:
+        if progress not in (None, True, "bar", "lines"):
+            raise ValueError(f"progress={progress!r}: expected None, True, False, 'bar' or "
+                             "'lines'")
+        bar = ProgressBar(case.name, comm=comm, mode="lines" if progress == "lines" else "bar",
+                          force=progress is True)
 
     prestressed = anchors is not None and any(a.prestress > 0 for a in anchors.anchors)
     newton = an.solver == "newton"
@@ -650,8 +661,14 @@ def assess(
                 state["stress"] = (model.stress.x.array.reshape(-1, 4)[:n, 3].copy(),
                                    model.u.x.array.copy(), float(load), float(disp))
         if bar is not None:
-            bar.update(load / scale, f"{load / 1e3:8.2f} kN  {disp * 1e3:7.3f} mm  "
-                       f"{len({k for k, _ in seen})} joints open")
+            past = load < max(loads[:-1])
+            factor = f"{load / limit_load:.3f}" if limit_load else "-"
+            bar.increment(f"{case.name}: increment {len(loads) - 1}: load factor {factor}, "
+                          f"load {load / 1e3:.3f} kN, displacement {disp * 1e3:.4f} mm, "
+                          f"iterations {iterations}, "
+                          f"{'converged, past the peak' if past else 'converged'}",
+                          load=f"{load / 1e3:.2f} kN", u=f"{disp * 1e3:.3f} mm",
+                          open=len({k for k, _ in seen}))
         if callback is not None:
             callback({"load": load, "displacement": disp, "iterations": iterations})
 
@@ -804,6 +821,7 @@ def assess(
         limit_status=None if la is None else str(la.status),
         limit_explanation="" if la is None else la.explanation,
         limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
+        limit_thrust=[] if la is None else thrust_lines(case, la),
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
         anchor_length=0.0 if anchors is None else anchors.total_length,
         anchor_peaks=list(anchor_peaks.values()),

@@ -53,8 +53,16 @@ tan_phi = 0.5
 kn = 5e9                       # [Pa/m]
 ks = 2e9                       # [Pa/m]
 
+# Positions: two conventions, named where they are used.
+#  * loading.position: a fraction of the SPAN, measured horizontally from the left
+#    springing (or loading.x [m] from it);
+#  * [[damage]] from/to and open_joint position, [[anchors]] positions: a position s ALONG
+#    THE ARCH, 0 at the left springing, 0.5 at the crown, 1 at the right springing (for a
+#    semicircular or segmental arch, the fraction of the arch's angle).
+#  So position = 0.25 is not s = 0.25: on a semicircular arch it is near s = 1/3.
+
 [loading]
-position = 0.25                # fraction of the span from the left springing (or x [m])
+position = 0.25                # fraction of the SPAN from the left springing (or x [m])
 spreader_width = 0.1           # [m]
 increment = 9806.65            # 1 tonne [N]
 max_load = 490332.5            # 50 tonnes [N]
@@ -77,7 +85,8 @@ post_peak_steps = 2
 
 # Damage, any number of entries:
 # [[damage]]
-# type = "ring_separation"     # rings = [0, 1] or "all"; from/to: fractions of the arch
+# type = "ring_separation"     # rings = [0, 1] or "all"; from/to: positions s ALONG THE
+#                              # ARCH (0 left springing, 0.5 crown, 1 right springing)
 # rings = [0, 1]
 # from = 0.3
 # to = 0.7
@@ -118,7 +127,8 @@ def _repair_example() -> str:
 # two curved stitches along the barrel, one in the inner ring and one in the outer ring.
 [[anchors]]
 layout = "inclined"
-positions = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85]  # s of the entry points
+positions = [0.05, 0.15, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.85]  # s ALONG THE ARCH
+                               # of the entry points (0 left springing, 1 right)
 inclination = 30.0             # [deg] to the intrados tangent (90: radial)
 diameter = 0.016               # [m]
 name = "inclined"

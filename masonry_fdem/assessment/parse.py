@@ -234,7 +234,10 @@ def _parse_loading(t: Table, span: float | None) -> LoadingSpec | None:
     else:
         pos = t.number("position", 0.25)
         if pos is not None and not 0.0 <= pos <= 1.0:
-            t.bad("position", f"{pos:g} is off the arch (0..1 of the span)")
+            # (issue #24: the two conventions named in the message)
+            t.bad("position", f"{pos:g} is off the arch (0..1 of the span): loading.position "
+                  "is a fraction of the span, horizontally from the left springing (unlike "
+                  "the positions s along the arch of [[damage]] and [[anchors]])")
             pos = None
     spread = t.number("spreader_width", 0.0, ge=0.0)
     if None not in (pos, spread, span) and (
@@ -300,7 +303,9 @@ def _parse_damage(i: int, data: Any, problems: list[str], arch: ArchSpec | None,
         which = _ring_list(t, rings, pair=kind is DamageKind.RING_SEPARATION)
         a, b = t.number("from", 0.0, ge=0.0, le=1.0), t.number("to", 1.0, ge=0.0, le=1.0)
         if None not in (a, b) and not b > a:
-            t.bad("to", f"must be > from ({a:g}), got {b:g}")
+            t.bad("to", f"must be > from ({a:g}), got {b:g} (from and to are positions s "
+                  "along the arch: 0 left springing, 0.5 crown, 1 right springing; not "
+                  "fractions of the span)")
             return None
         factor = 1.0
         if kind is DamageKind.DECAYED_MORTAR:

@@ -15,7 +15,7 @@ import numpy as np
 from masonry_fdem.io.plot import save_load_curve
 from masonry_fdem.io.rundir import hand_over, partial_folder
 
-__all__ = ["read_curve", "status_text", "write_run_folder"]
+__all__ = ["read_curve", "status_text", "thrust_lines", "write_run_folder"]
 
 
 def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
@@ -48,9 +48,16 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
         umax = float(np.abs(u).max()) if u is not None and u.size else 0.0
         umax = comm.bcast(umax, root=0)
         mag = 0.05 * span / umax if umax > 0 else 1.0
+        pts = case.load_points()
+        last = float(res.loads[-1]) if len(res.loads) else 0.0
+        at_peak = res.hinges_at_collapse
         plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
                     title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
-                    joints=inter[1], anchors=anchors)
+                    joints=inter[1], anchors=anchors, loads=pts,
+                    load_label=f"P = {last / 1e3:.2f} kN",
+                    hinges=[e.position for e in at_peak] or None,
+                    hinge_labels=[_order(res, e) for e in at_peak],
+                    hinge_sides=[_side(e) for e in at_peak])
         drawn = []
         if snapshots:
             now = model.u.x.array.copy()
@@ -61,9 +68,16 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                                         op=MPI.MAX)
                     m = 0.05 * span / um if um > 0 else 1.0
                     file = name.replace(" ", "_") + ".png"
+                    # the hinges open by then (along the path: by the displacement)
+                    opened = [e for e in res.events if e.kind == "hinge"
+                              and e.displacement <= disp * (1 + 1e-9)]
                     plot_blocks(model, tmp / file, field="displacement", scale=m,
                                 title=f"{case.name}: at the {name}\n{load / 1e3:.2f} kN, "
-                                      f"{disp * 1e3:.3f} mm (deformed ×{m:.0f})")
+                                      f"{disp * 1e3:.3f} mm (deformed ×{m:.0f})",
+                                loads=pts, load_label=f"P = {load / 1e3:.2f} kN",
+                                hinges=[e.position for e in opened] or None,
+                                hinge_labels=[str(e.order) for e in opened],
+                                hinge_sides=[_side(e) for e in opened])
                     drawn.append((name, file, load, disp))
             finally:
                 model.u.x.array[:] = now
@@ -99,6 +113,18 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
     res.folder = folder
     res.report = folder / "report.md"
     comm.barrier()
+
+
+def _order(res, hinge) -> str:
+    """The order of opening of a hinge at the peak load (its joint's first event)."""
+    return next((str(e.order) for e in res.events
+                 if e.joint == hinge.joint and e.kind == hinge.kind), "")
+
+
+def _side(event) -> float:
+    """+1 for a hinge that turns about the extrados (its intrados opens), -1 for one that
+    turns about the intrados: where its label goes, outside or inside the ring."""
+    return -1.0 if event.side == "extrados" else 1.0
 
 
 def _write_rank0(case, res, tmp: Path, mag: float, drawn=()) -> None:
@@ -145,28 +171,146 @@ def _write_rank0(case, res, tmp: Path, mag: float, drawn=()) -> None:
                     color="C2", xytext=(2, -9), textcoords="offset points")
     save_load_curve(fig, ax, f"{case.name}: {res.control} control", tmp / "load_displacement.png")
 
-    layout = case.layout()
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for poly in layout.polygons:
-        p = np.vstack([poly, poly[:1]])
-        ax.plot(p[:, 0], p[:, 1], color="0.6", lw=0.6)
-    for e in res.hinges_at_collapse:
-        ax.plot(*e.position, "o", ms=9, mfc="none", mec="C3", mew=2)
-    for e in res.events:
-        ax.annotate(str(e.order), e.position, fontsize=8, color="C3",
-                    xytext=(4, 4), textcoords="offset points")
-    for _, pos in res.limit_hinges:
-        ax.plot(*pos, "x", ms=8, color="C0", mew=2)
-    for x, y in case.load_points():
-        ax.annotate("", (x, y), xytext=(x, y + 0.12 * case.arch.span),
-                    arrowprops=dict(arrowstyle="->", color="k"))
-    ax.set_aspect("equal")
-    ax.set_title("hinges: FDEM at the peak load (red circles; numbers: order of opening), "
-                 "limit analysis (blue ×)", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(tmp / "hinges.png", dpi=120)
-    plt.close(fig)
+    _hinges_figure(case, res, tmp / "hinges.png")
     (tmp / "report.md").write_text(_report(case, res, mag, drawn), encoding="utf-8")
+
+
+def thrust_lines(case, la) -> list[list[tuple[float, float]]]:
+    """The line of thrust of a limit-analysis result: per ring of the arch, the point [m]
+    where the resultant of each radial joint acts (springing to springing), from
+    :attr:`~masonry_fdem.solvers.limit_analysis.LimitResult.thrust_points`; joints that
+    carry no compression are left out. Empty if the LP found no equilibrium."""
+    from masonry_fdem.assessment.specs import classify_interface
+
+    forces = np.asarray(la.interface_forces, dtype=float)
+    if forces.size == 0 or not np.all(np.isfinite(forces)):
+        return []
+    pts = la.thrust_points
+    itf = la.interfaces
+    rings: dict[int, list[tuple[int, tuple[float, float]]]] = {}
+    for i in range(itf.size):
+        where = classify_interface(la.names[itf.block_a[i]], la.names[itf.block_b[i]],
+                                   case.arch)
+        if where is None or where[0] != "joint" or not np.all(np.isfinite(pts[i])):
+            continue
+        rings.setdefault(where[1], []).append((where[2], (float(pts[i][0]),
+                                                          float(pts[i][1]))))
+    return [[p for _, p in sorted(rows)] for _, rows in sorted(rings.items())]
+
+
+def _damage_segments(case, layout):
+    """Interfaces of ``layout`` changed by the case's [[damage]]: ``(dry, weakened)``
+    lists of ``(2, 2)`` segments [m] (no bond: open joints, separated rings; weakened:
+    decayed mortar)."""
+    from masonry_fdem.assessment.specs import classify_interface
+    from masonry_fdem.solvers.limit_analysis import find_interfaces
+
+    dry, weak = [], []
+    if not case.damage:
+        return dry, weak
+    itf = find_interfaces(layout)
+    for i in range(itf.size):
+        where = classify_interface(layout.names[itf.block_a[i]], layout.names[itf.block_b[i]],
+                                   case.arch)
+        if where is None:
+            continue
+        kind, factor = case._joint_state(where, 0.5 * (itf.start[i] + itf.end[i]))
+        seg = np.array([itf.start[i], itf.end[i]])
+        if kind == "dry":
+            dry.append(seg)
+        elif factor < 1.0:
+            weak.append(seg)
+    return dry, weak
+
+
+def _hinges_figure(case, res, path: Path) -> None:
+    """The arch with the FDEM hinges at the peak load (numbered in order of opening), the
+    limit analysis's hinges and line of thrust, the load and the damaged joints."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+
+    from masonry_fdem.io.plot import label_points
+
+    layout = case.layout()
+    span = case.arch.span
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    handles = []
+    # the voussoirs of "missing_brick" damage, dashed where they were
+    full = {n: p for n, p in zip(case.layout().names, case.layout().polygons, strict=True)}
+    from masonry_fdem.geometry import arch_layout
+
+    whole = arch_layout(**case.arch.layout_kwargs())
+    for poly, name in zip(whole.polygons, whole.names, strict=True):
+        p = np.vstack([poly, poly[:1]])
+        if name in full:
+            ax.fill(p[:, 0], p[:, 1], color="0.92", lw=0)
+            ax.plot(p[:, 0], p[:, 1], color="0.55", lw=0.6)
+        else:
+            ax.plot(p[:, 0], p[:, 1], color="C1", lw=1.0, ls="--")
+            if not any(h.get_label() == "missing brick" for h in handles):
+                handles.append(Line2D([], [], color="C1", ls="--", label="missing brick"))
+    dry, weak = _damage_segments(case, layout)
+    if dry:
+        ax.add_collection(LineCollection(dry, colors="C1", linewidths=2.5))
+        handles.append(Line2D([], [], color="C1", lw=2.5, label="damage: no bond"))
+    if weak:
+        ax.add_collection(LineCollection(weak, colors="C8", linewidths=2.5))
+        handles.append(Line2D([], [], color="C8", lw=2.5, label="damage: decayed mortar"))
+    for line in res.limit_thrust:
+        if len(line) > 1:
+            q = np.asarray(line)
+            ax.plot(q[:, 0], q[:, 1], "-", color="C0", lw=1.2, alpha=0.8)
+    if any(len(line) > 1 for line in res.limit_thrust):
+        handles.append(Line2D([], [], color="C0", lw=1.2,
+                              label="line of thrust at the limit-analysis load"))
+    for _, pos in res.limit_hinges:
+        ax.plot(*pos, "x", ms=8, color="C0", mew=2, zorder=4)
+    if res.limit_hinges:
+        handles.append(Line2D([], [], ls="", marker="x", ms=8, color="C0", mew=2,
+                              label="limit-analysis hinge"))
+    for e in res.hinges_at_collapse:
+        ax.plot(*e.position, "o", ms=10, mfc="none", mec="C3", mew=2, zorder=5)
+    if res.hinges_at_collapse:
+        handles.append(Line2D([], [], ls="", marker="o", ms=10, mfc="none", mec="C3", mew=2,
+                              label="FDEM hinge at the peak load"))
+    # the order of opening beside each joint, outside the extrados or inside the intrados
+    # (radially from the middle of the springing line); neighbours share one label
+    if res.events:
+        pos = np.array([e.position for e in res.events], dtype=float)
+        out = pos - np.array([0.0, 0.0])
+        # (a hinge's position is the end it turns about: on the extrados when the
+        # intrados opens)
+        sign = np.array([_side(e) for e in res.events])
+        ax.plot(pos[:, 0], pos[:, 1], "o", ms=3.5, color="C3", zorder=5)
+        label_points(ax, pos, [str(e.order) for e in res.events], out * sign[:, None],
+                     0.06 * span, fontsize=8, color="C3")
+    if res.events:
+        handles.append(Line2D([], [], ls="", marker="o", ms=3.5, color="C3",
+                              label="joint that opened; number: order of opening"))
+    pts = case.load_points()
+    for x, y in pts:
+        ax.annotate("", (x, y), xytext=(x, y + 0.15 * span),
+                    arrowprops=dict(arrowstyle="-|>", color="k", lw=1.5, mutation_scale=12))
+    peak = res.collapse_load or res.peak_load
+    x0, y0 = pts.mean(axis=0)
+    ax.annotate(f"P = {peak / 1e3:.2f} kN" + ("" if res.collapse_load else " (carried)"),
+                (x0, y0 + 0.15 * span), xytext=(0, 4), textcoords="offset points",
+                ha="center", va="bottom", fontsize=9)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(lo, max(hi, y0 + 0.22 * span))
+    ax.set_xlabel("x [m] (origin at mid-span)")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{case.name}: hinges and line of thrust", fontsize=11)
+    ax.grid(alpha=0.2)
+    if handles:
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+                  ncol=2, fontsize=8, frameon=False)
+    fig.tight_layout()
+    fig.savefig(path, dpi=150, bbox_inches="tight")
+    plt.close(fig)
 
 
 def status_text(res) -> str:

@@ -40,7 +40,7 @@ from masonry_fdem.geometry.layout import (
     wall_layout,
 )
 from masonry_fdem.geometry.meshing import mesh_blocks
-from masonry_fdem.geometry.msh import read_msh, write_msh
+from masonry_fdem.geometry.msh import interface_rules, read_msh, read_msh_lines, write_msh
 from masonry_fdem.geometry.polygons import as_polygon, polygon_area, polygon_centroid, rectangle
 
 __all__ = [
@@ -63,7 +63,9 @@ __all__ = [
     "mesh_blocks",
     "polygon_area",
     "polygon_centroid",
+    "interface_rules",
     "read_msh",
+    "read_msh_lines",
     "rectangle",
     "stack_layout",
     "wall_layout",

@@ -18,6 +18,16 @@ no group. :func:`write_msh` writes one physical group per block named after the 
 restores a block mesh exactly.
 
 Linear triangles are read as they are; linear quadrangles are split into two triangles.
+
+Joints: a physical *line* group (Physical Curve, 1D) drawn along interfaces between blocks
+names those joints. :func:`read_msh_lines` reads the segments of every such group and
+:func:`interface_rules` turns ``{group name: joint material}`` into the ``where`` rules of
+:class:`~masonry_fdem.interactions.Joints`, so the interfaces on a group get the joint
+material named for it, e.g.::
+
+    lines = read_msh_lines("wall.msh")
+    joints = Joints(model, {("brick", "brick"): None},
+                    where=interface_rules(lines, {"bed": mortar, "head": None}))
 """
 
 from __future__ import annotations
@@ -35,11 +45,11 @@ from scipy.sparse.csgraph import connected_components
 from masonry_fdem.geometry._gmsh import gmsh_model, on_root
 from masonry_fdem.geometry.blockmesh import BlockMesh
 
-__all__ = ["read_msh", "write_msh"]
+__all__ = ["interface_rules", "read_msh", "read_msh_lines", "write_msh"]
 
 log = logging.getLogger(__name__)
 
-_TRIANGLE, _QUADRANGLE = 2, 3  # Gmsh element types of linear triangles / quadrangles
+_LINE, _TRIANGLE, _QUADRANGLE = 1, 2, 3  # Gmsh types: linear lines, triangles, quads
 _DEFAULT_MATERIAL = "default"
 
 
@@ -249,6 +259,104 @@ def read_msh(
         raise ValueError(f"blocks must be 'physical' or 'components', got {blocks!r}")
     path = Path(path)
     return BlockMesh(**on_root(comm, lambda: _read(path, blocks, materials)))
+
+
+def _read_lines(path: Path) -> dict[str, np.ndarray]:
+    if not path.is_file():
+        raise FileNotFoundError(f"mesh file not found: {path}")
+    out: dict[str, np.ndarray] = {}
+    with gmsh_model():
+        try:
+            gmsh.merge(str(path))
+        except Exception as exc:
+            raise ValueError(f"Gmsh cannot read {path}: {exc}") from exc
+        tags, xyz, _ = gmsh.model.mesh.getNodes()
+        tags = np.asarray(tags, dtype=np.int64)
+        xyz = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
+        row = np.full(int(tags.max(initial=0)) + 1, -1, dtype=np.int64)
+        row[tags] = np.arange(tags.size)
+        for _, ptag in sorted(gmsh.model.getPhysicalGroups(1)):
+            name = gmsh.model.getPhysicalName(1, ptag) or f"physical:{ptag}"
+            if name in out:
+                raise ValueError(f"{path}: two physical line groups are named {name!r}")
+            segs = []
+            for ent in gmsh.model.getEntitiesForPhysicalGroup(1, ptag):
+                types, _, nodes = gmsh.model.mesh.getElements(1, int(ent))
+                for etype, enodes in zip(types, nodes, strict=True):
+                    if etype != _LINE:
+                        ename = gmsh.model.mesh.getElementProperties(etype)[0]
+                        raise ValueError(f"{path}: physical line group {name!r} has "
+                                         f"{ename!r} elements; only 2-node lines are read")
+                    segs.append(row[np.asarray(enodes, dtype=np.int64).reshape(-1, 2)])
+            if not segs:
+                log.warning("%s: physical line group %r has no line elements; skipped",
+                            path, name)
+                continue
+            seg = np.concatenate(segs)
+            out[name] = xyz[seg][:, :, :2].copy()
+    return out
+
+
+def read_msh_lines(path: str | Path, *, comm: Any | None = None) -> dict[str, np.ndarray]:
+    """The physical line groups (1D) of a Gmsh mesh: the interfaces they mark.
+
+    Args:
+        path: the ``.msh`` file.
+        comm: mpi4py communicator; if given, rank 0 reads and every rank receives the
+            result (collective call).
+
+    Returns:
+        ``{group name: (m, 2, 2) segment end points [m]}`` (``"physical:<tag>"`` for an
+        unnamed group); empty when the mesh has no physical lines.
+
+    Raises:
+        FileNotFoundError: the file does not exist.
+        ValueError: unreadable file, two groups of one name, curved (higher-order) lines.
+    """
+    path = Path(path)
+    return on_root(comm, lambda: _read_lines(path))
+
+
+def interface_rules(lines: dict[str, np.ndarray], materials: dict[str, Any],
+                    tolerance: float | None = None) -> list[tuple[Any, Any]]:
+    """``where`` rules of :class:`~masonry_fdem.interactions.Joints` from line groups.
+
+    Args:
+        lines: ``{group name: (m, 2, 2) segments [m]}`` (:func:`read_msh_lines`).
+        materials: ``{group name: JointMaterial or None (dry)}``; every key must be a
+            group of ``lines``.
+        tolerance: distance [m] from a group's segments within which a joint's midpoint
+            is on the group (default: 1e-6 of the largest extent of the lines, at least
+            1e-12 m).
+
+    Returns:
+        ``[(predicate(midpoint) -> bool, material), ...]`` in the order of ``materials``.
+
+    Raises:
+        ValueError: a key of ``materials`` that is not a line group.
+    """
+    unknown = sorted(set(materials) - set(lines))
+    if unknown:
+        raise ValueError(f"joint materials name physical line groups that are not in the "
+                         f"mesh: {unknown} (line groups: {sorted(lines) or 'none'})")
+    if tolerance is None:
+        pts = np.concatenate([s.reshape(-1, 2) for s in lines.values()]) if lines else \
+            np.zeros((1, 2))
+        tolerance = max(1e-6 * float(np.ptp(pts, axis=0).max()), 1e-12)
+    tol = float(tolerance)
+
+    def on(seg: np.ndarray):
+        a, d = seg[:, 0], seg[:, 1] - seg[:, 0]
+        dd = np.maximum(np.einsum("ij,ij->i", d, d), 1e-300)
+
+        def predicate(p) -> bool:
+            t = np.clip(np.einsum("ij,ij->i", np.asarray(p)[None, :2] - a, d) / dd, 0, 1)
+            dist = np.hypot(*(a + t[:, None] * d - np.asarray(p)[None, :2]).T)
+            return bool(dist.min() <= tol)
+
+        return predicate
+
+    return [(on(lines[name]), jm) for name, jm in materials.items()]
 
 
 def write_msh(block_mesh: BlockMesh, path: str | Path, *, comm: Any | None = None) -> Path:

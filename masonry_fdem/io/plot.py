@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_blocks", "save_load_curve"]
+__all__ = ["label_points", "plot_blocks", "save_load_curve"]
 
 
 def _von_mises(sig: np.ndarray) -> np.ndarray:
@@ -27,6 +27,11 @@ def plot_blocks(
     disks=None,
     anchors=None,
     clim: tuple[float, float] | None = None,
+    loads: np.ndarray | None = None,
+    load_label: str = "",
+    hinges: np.ndarray | None = None,
+    hinge_labels: list[str] | None = None,
+    hinge_sides: list[float] | None = None,
 ) -> Path | None:
     """Draw the blocks in their deformed position, coloured by a field (collective).
 
@@ -49,6 +54,12 @@ def plot_blocks(
             coloured by their axial force per bar [N] (second colour bar); ruptured bar
             elements are drawn dashed in grey.
         clim: (low, high) of the colour scale (default: the field's range).
+        loads: ``(k, 2)`` points [m] (undeformed) where a vertical load acts downwards:
+            an arrow onto each, at its deformed place, labelled ``load_label``.
+        hinges: ``(k, 2)`` points [m] (undeformed) of hinges, circled at their deformed
+            place, with ``hinge_labels`` (e.g. the order of opening) beside them: away
+            from the middle of the drawing's base, or towards it where ``hinge_sides``
+            is negative (a hinge on an arch's intrados).
 
     Returns:
         The path on rank 0, None on other ranks.
@@ -60,7 +71,7 @@ def plot_blocks(
     label = ""
     if isinstance(field, str):
         if field == "displacement":
-            node_values, label = np.linalg.norm(u, axis=1), "|u| [m]"
+            node_values, label = 1e3 * np.linalg.norm(u, axis=1), "|u| [mm]"
         elif field == "von_mises":
             model.update_stress()
             sig = model.stress.x.array.reshape(-1, 4)
@@ -113,7 +124,11 @@ def plot_blocks(
 
     xy = blocks.x + scale * u
     tri = Triangulation(xy[:, 0], xy[:, 1], blocks.cells)
+    from mpl_toolkits.axes_grid1 import make_axes_locatable
+
     fig, ax = plt.subplots(figsize=(8, 6), dpi=120)
+    # colour bars as tall (or wide) as the drawing, beside it, never over each other
+    divider = make_axes_locatable(ax)
     lim = {} if clim is None else {"vmin": clim[0], "vmax": clim[1]}
     if cell_values is not None:
         pc = ax.tripcolor(tri, facecolors=cell_values, cmap=cmap,
@@ -134,7 +149,9 @@ def plot_blocks(
                 ax.add_collection(LineCollection(jseg[sel], colors=colour, linewidths=1.6,
                                                  label=JOINT_STATES[code]))
         if np.any(jstate > 0):
-            ax.legend(loc="upper right", fontsize=7)
+            # below the drawing: neither over the blocks nor over the title
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=4, fontsize=8,
+                      frameon=False, title="joints", title_fontsize=8)
     if disks is not None:
         from matplotlib.collections import PatchCollection
         from matplotlib.patches import Circle
@@ -146,7 +163,30 @@ def plot_blocks(
         ax.add_collection(LineCollection(np.stack([disks.x, tip], axis=1), colors="0.3",
                                          linewidths=0.3))
         ax.autoscale_view()
-    fig.colorbar(pc, ax=ax, label=label, shrink=0.8)
+    fig.colorbar(pc, cax=divider.append_axes("right", size="3%", pad=0.1), label=label)
+    size = float(np.ptp(xy, axis=0).max()) if xy.size else 1.0
+    if loads is not None and len(loads):
+        tips = _deformed(blocks.x, xy, np.asarray(loads, dtype=float))
+        for x, y in tips:
+            ax.annotate("", (x, y), xytext=(x, y + 0.12 * size),
+                        arrowprops=dict(arrowstyle="-|>", color="C3", lw=1.8,
+                                        mutation_scale=14), zorder=6)
+        if load_label:
+            x0, y0 = tips.mean(axis=0)
+            ax.annotate(load_label, (x0, y0 + 0.12 * size), xytext=(0, 4),
+                        textcoords="offset points", ha="center", va="bottom", fontsize=9,
+                        color="C3")
+        ax.set_ylim(top=max(ax.get_ylim()[1], tips[:, 1].max() + 0.18 * size))
+    if hinges is not None and len(hinges):
+        at = _deformed(blocks.x, xy, np.asarray(hinges, dtype=float))
+        ax.plot(at[:, 0], at[:, 1], "o", ms=9, mfc="none", mec="C3", mew=1.8, zorder=6)
+        if hinge_labels:
+            # outward from the middle of the drawing's base (an arch's springing line)
+            base = np.array([0.5 * (xy[:, 0].min() + xy[:, 0].max()), xy[:, 1].min()])
+            sides = np.ones(len(at)) if hinge_sides is None else np.asarray(hinge_sides)
+            label_points(ax, at, list(hinge_labels) + [""] * (len(at) - len(hinge_labels)),
+                         (at - base) * np.sign(sides)[:, None], 0.06 * size, fontsize=8,
+                         color="C3")
     if anchors is not None:
         ok = ~arupt
         lc = LineCollection(aseg[ok], array=aforce[ok] / 1e3, cmap="plasma", linewidths=2.5)
@@ -154,7 +194,8 @@ def plot_blocks(
         if arupt.any():
             ax.add_collection(LineCollection(aseg[arupt], colors="0.5", linewidths=1.5,
                                              linestyles="dashed"))
-        fig.colorbar(lc, ax=ax, label="anchor force [kN]", shrink=0.8, pad=0.02)
+        fig.colorbar(lc, cax=divider.append_axes("right", size="3%", pad=0.75),
+                     label="anchor force [kN]")
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -164,6 +205,42 @@ def plot_blocks(
     fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def label_points(ax, points, labels, directions, radius: float, **style) -> None:
+    """Label points without the labels running over each other: points closer than
+    ``radius`` [m] (chained) share one label, their labels joined by commas; it stands
+    beyond the group's outermost point along the group's direction (a unit vector per
+    point; the first point's counts), aligned so that the text grows away from the
+    points. ``style``: text keywords (fontsize, colour, ...)."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    n = len(pts)
+    group = np.arange(n)
+    for i in range(n):  # single linkage, union by relabelling (a handful of points)
+        for j in range(i + 1, n):
+            if np.hypot(*(pts[i] - pts[j])) < radius and group[i] != group[j]:
+                group[group == group[j]] = group[i]
+    for g in dict.fromkeys(group):
+        idx = np.flatnonzero(group == g)
+        d = np.asarray(directions[idx[0]], dtype=float)
+        d = d / max(float(np.hypot(*d)), 1e-300)
+        k = idx[np.argmax(pts[idx] @ d)]
+        text = ", ".join(dict.fromkeys(str(labels[i]) for i in idx if str(labels[i])))
+        if not text:
+            continue
+        ha = "left" if d[0] > 0.35 else "right" if d[0] < -0.35 else "center"
+        va = "bottom" if d[1] > 0.35 else "top" if d[1] < -0.35 else "center"
+        ax.annotate(text, tuple(pts[k]), xytext=tuple(9.0 * d), textcoords="offset points",
+                    ha=ha, va=va, zorder=7,
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8),
+                    **style)
+
+
+def _deformed(x: np.ndarray, xy: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """The deformed places of points: each moved with the node nearest to it."""
+    d = np.linalg.norm(x[None, :, :] - points[:, None, :], axis=2)
+    near = np.argmin(d, axis=1)
+    return points + (xy[near] - x[near])
 
 
 def save_load_curve(fig, ax, title: str, path: Path) -> None:

@@ -7,6 +7,15 @@ P1) and ``stress.bp`` (Cauchy stress per cell, DG0); with bonded joints a third,
 VTX reader and apply "Warp By Vector" on the displacement. Models with history or plastic
 laws also get ``materials.bp`` (DG0): history variables such as "kappa", the "damage",
 "plastic_strain" (accumulated α) and "plastic_work_density" [J/m³].
+
+Beside the ``.bp`` series, the same states as plain VTK files that any ParaView (and
+meshio) opens: ``model.pvd``, a collection of ``model_<k>.vtu`` files (one per write),
+each the whole block mesh in the order of the :class:`~masonry_fdem.geometry.BlockMesh`
+(its points and triangles), with point data "displacement" [m] and "velocity" [m/s]
+(z = 0 as the third component, for "Warp By Vector") and cell data "stress" (Cauchy
+stress [Pa], components xx, xy, yx, yy), "block" (block id) and, when written to the
+``.bp`` files, the material fields and "joint_state". Under MPI the ranks send their
+nodes and cells to rank 0, which writes one ``.vtu`` per step (no ``.pvtu`` pieces).
 """
 
 from __future__ import annotations
@@ -17,6 +26,9 @@ import masonry_fdem._compat  # noqa: F401
 import dolfinx
 import dolfinx.fem
 import dolfinx.io
+import numpy as np
+
+from masonry_fdem.io._vtk import write_collection
 
 __all__ = ["VTXOutput"]
 
@@ -27,10 +39,14 @@ class VTXOutput:
     Args:
         model: the model.
         folder: output folder (created).
+        joints: the :class:`~masonry_fdem.interactions.Joints` whose state is written.
+        vtu: also write the ``.vtu`` files and the ``model.pvd`` collection.
     """
 
-    def __init__(self, model, folder: str | Path, joints=None):
+    def __init__(self, model, folder: str | Path, joints=None, vtu: bool = True):
         self.model = model
+        self.vtu = bool(vtu)
+        self._steps: list[tuple[float, str]] = []
         self.joints = joints
         self.folder = Path(folder)
         if model.comm.rank == 0:
@@ -81,6 +97,42 @@ class VTXOutput:
             self.joint_state.x.array[: cells.size] = state[cells]
             self.joint_state.x.scatter_forward()
             self._joint.write(t)
+        if self.vtu:
+            self._write_vtu(t)
+
+    def _write_vtu(self, t: float) -> None:
+        """Gather the state on rank 0 and write ``model_<k>.vtu`` and ``model.pvd``."""
+        model = self.model
+        comm = model.comm
+        n_cells = model.dmesh.cell_input.size
+        cell = {"stress": model.stress.x.array.reshape(-1, 4)[:n_cells]}
+        if self._mat is not None:
+            for n, f in self.material.items():
+                cell[n] = f.x.array[:n_cells]
+        if self._joint is not None:
+            cell["joint_state"] = self.joint_state.x.array[:n_cells]
+        nodal = {"displacement": model.u.x.array.reshape(-1, 2)[: model.n_nodes],
+                 "velocity": self.velocity.x.array.reshape(-1, 2)[: model.n_nodes]}
+        parts = comm.gather((model.node_input, nodal, model.dmesh.cell_input, cell), root=0)
+        if comm.rank == 0:
+            import meshio
+
+            bm = model.blocks
+            point_data = {n: np.zeros((bm.n_nodes, 3)) for n in nodal}
+            cell_data = {n: np.zeros((bm.n_cells,) + np.shape(v)[1:]) for n, v in cell.items()}
+            for nodes, nd, cells, cd in parts:
+                for n, v in nd.items():
+                    point_data[n][nodes, :2] = v
+                for n, v in cd.items():
+                    cell_data[n][cells] = v
+            cell_data["block"] = bm.cell_block.astype(np.int64)
+            name = f"model_{len(self._steps):06d}.vtu"
+            mesh = meshio.Mesh(np.c_[bm.x, np.zeros(bm.n_nodes)], [("triangle", bm.cells)],
+                               point_data=point_data,
+                               cell_data={n: [v] for n, v in cell_data.items()})
+            meshio.write(self.folder / name, mesh, file_format="vtu")
+            self._steps.append((float(t), name))
+            write_collection(self.folder / "model.pvd", self._steps)
 
     def close(self) -> None:
         self._nodal.close()

@@ -143,6 +143,32 @@ class Model:
         self.prescriptions: list[Prescription] = []
         self.monitors: dict[str, tuple[int, int]] = {}
 
+    @property
+    def u(self) -> dolfinx.fem.Function:
+        """The nodal displacement [m] (a dolfinx Function, P1, 2 dofs per node: x, y).
+
+        Assignable like ``v``: ``model.u = values`` copies an array of the local dofs
+        (``model.u.x.array``'s length, or the owned dofs only: the ghosts are then updated)
+        or another Function's values into it; the Function itself stays (the forms use it).
+        """
+        return self._u
+
+    @u.setter
+    def u(self, values) -> None:
+        if isinstance(values, dolfinx.fem.Function):
+            values = values.x.array
+        arr = np.asarray(values, dtype=self._u.x.array.dtype).ravel()
+        n_all, n_owned = self._u.x.array.size, 2 * self.n_nodes
+        if arr.size == n_all:
+            self._u.x.array[:] = arr
+        elif arr.size == n_owned:
+            self._u.x.array[:n_owned] = arr
+            self._u.x.scatter_forward()
+        else:
+            raise ValueError(f"model.u = ...: expected {n_all} values (2 per local node"
+                             f"{'' if n_all == n_owned else f', or {n_owned} owned'}), got "
+                             f"{arr.size}")
+
     # ------------------------------------------------------------------ set-up
     def _setup_spaces(self) -> None:
         mesh = self.mesh
@@ -151,8 +177,8 @@ class Model:
         if imap.num_ghosts != 0:
             raise RuntimeError("a block is split between ranks (ghost nodes found)")
         self.n_nodes = imap.size_local
-        self.u = dolfinx.fem.Function(self.V, name="displacement")
-        self.v = np.zeros_like(self.u.x.array)
+        self._u = dolfinx.fem.Function(self.V, name="displacement")
+        self.v = np.zeros_like(self._u.x.array)
         # local dof-node -> input node of the BlockMesh, through the geometry dofmap
         cell_dofs = self.V.dofmap.list
         geom = mesh.geometry.dofmaps[0]

@@ -312,6 +312,8 @@ class Joints(Interaction):
         self.dry_blocks = np.unique(np.r_[ba[~bonded], bb[~bonded]]).astype(np.int64)
         seg, fa, fb, mid = seg[bonded], fa[bonded], fb[bonded], mid[bonded]
         mats = [jm for jm in chosen if jm is not None]
+        #: the joint material of each bonded segment (``seg_mid`` gives where it is)
+        self.segment_materials = tuple(mats)
         ba, bb = fblock[fa], fblock[fb]
         # ---- property rows (default stiffness from the blocks' E and the facet length)
         E = np.array([model.materials[n].E for n in names])
