@@ -138,6 +138,37 @@ def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
     assert np.all(np.diff(res.displacements[: k + 1]) > 0)
 
 
+def test_dry_arch_fdem_thrust_line_touches_the_faces_at_its_hinges(dry_runs):
+    """The FDEM's line of thrust at the peak (where the resultant of the contact forces
+    across each radial joint crosses it): inside the ring at every joint, and at the
+    face the hinge turns about at each of the four hinges (the outer 5 % of the
+    thickness), as the limit analysis's line of thrust at its hinges."""
+    from masonry_fdem.geometry.arches import arch_circle
+
+    res = dry_runs[2000.0]
+    radius, yc, _ = arch_circle("semicircular", 2.0)
+    t = 0.2
+    (line,) = res.fdem_thrust  # one ring
+    q = np.asarray(line)
+    assert q.shape == (13, 2)  # 11 joints and 2 springings, all in compression
+    ecc = (np.hypot(q[:, 0], q[:, 1] - yc) - radius - 0.5 * t) / t  # −½ intrados … ½
+    print("\nFDEM thrust line at the peak, eccentricity / thickness at the joints: "
+          + " ".join(f"{e:+.3f}" for e in ecc))
+    assert np.all(np.abs(ecc) <= 0.5 + 1e-6)
+    hinges = [e for e in res.hinges_at_collapse if e.kind == "hinge"]
+    for h in hinges:
+        ph = np.asarray(h.position)
+        k = int(np.argmin(np.linalg.norm(q - ph, axis=1)))
+        face = 0.5 if np.hypot(ph[0], ph[1] - yc) > radius + 0.5 * t else -0.5
+        print(f"  {h.joint}: eccentricity {ecc[k]:+.3f} t (face {face:+.1f})")
+        assert abs(ecc[k] - face) <= 0.05, (h.joint, ecc[k])
+    # elsewhere the line stays off the faces
+    others = np.ones(len(q), dtype=bool)
+    others[[int(np.argmin(np.linalg.norm(q - np.asarray(h.position), axis=1)))
+            for h in hinges]] = False
+    assert np.all(np.abs(ecc[others]) < 0.45)
+
+
 def test_halving_the_load_increment(dry_runs):
     assert dry_runs[1000.0].status.status is Status.PEAK_PASSED
     a, b = dry_runs[2000.0].collapse_load, dry_runs[1000.0].collapse_load

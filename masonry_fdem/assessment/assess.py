@@ -65,6 +65,7 @@ import numpy as np
 from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
 from masonry_fdem.assessment.specs import SPREADER, classify_interface
 from masonry_fdem.geometry.arches import arch_centre, arch_parameter
+from masonry_fdem.assessment.thrust import JointThrust
 from masonry_fdem.assessment.report import thrust_lines, write_run_folder
 from masonry_fdem.io.rundir import run_folder_problem
 from masonry_fdem.solvers.status import RunStatus, Status
@@ -173,6 +174,10 @@ class Assessment:
     #: the limit analysis's line of thrust: per ring, the points [m] where the resultant
     #: crosses each radial joint, springing to springing (empty without limit analysis)
     limit_thrust: list[list[tuple[float, float]]] = field(default_factory=list)
+    #: the FDEM's line of thrust at the peak load: per ring, the points [m] where the
+    #: resultant of the contact and joint forces across each radial joint crosses it,
+    #: springing to springing (:class:`~masonry_fdem.assessment.thrust.JointThrust`)
+    fdem_thrust: list[list[tuple[float, float]]] = field(default_factory=list)
 
     @property
     def collapse_load(self) -> float | None:
@@ -617,7 +622,8 @@ def assess(
     loads, disps, iters = [0.0], [0.0], [it0]
     events: list[JointEvent] = []
     seen: set[tuple[int, str]] = set()  # (joint, kind) already in the sequence
-    state: dict[str, Any] = {"open": [], "anchors": []}
+    state: dict[str, Any] = {"open": [], "anchors": [], "fdem_thrust": []}
+    thrust = JointThrust(case, model)
     anchor_peaks: dict[str, dict] = {}  # per anchor: its largest bar force over the run
 
     # load-line displacement: mean vertical displacement of the nodes nearest the points
@@ -654,6 +660,7 @@ def assess(
             snapshots["first hinge"] = (model.u.x.array.copy(), float(load), float(disp))
         if "peak load" not in snapshots or load > snapshots["peak load"][1]:
             snapshots["peak load"] = (model.u.x.array.copy(), float(load), float(disp))
+            state["fdem_thrust"] = thrust.lines(inter)
             if case.fill is not None and write:
                 # the load's path through the fill: σ_yy per cell at the peak
                 model.update_stress()
@@ -822,6 +829,7 @@ def assess(
         limit_explanation="" if la is None else la.explanation,
         limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
         limit_thrust=[] if la is None else thrust_lines(case, la),
+        fdem_thrust=state["fdem_thrust"],
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
         anchor_length=0.0 if anchors is None else anchors.total_length,
         anchor_peaks=list(anchor_peaks.values()),

@@ -264,6 +264,13 @@ def _hinges_figure(case, res, path: Path) -> None:
     if any(len(line) > 1 for line in res.limit_thrust):
         handles.append(Line2D([], [], color="C0", lw=1.2,
                               label="line of thrust at the limit-analysis load"))
+    for line in res.fdem_thrust:
+        if len(line) > 1:
+            q = np.asarray(line)
+            ax.plot(q[:, 0], q[:, 1], "--", color="C2", lw=1.4, zorder=3)
+    if any(len(line) > 1 for line in res.fdem_thrust):
+        handles.append(Line2D([], [], color="C2", lw=1.4, ls="--",
+                              label="line of thrust of the FDEM at its peak load"))
     for _, pos in res.limit_hinges:
         ax.plot(*pos, "x", ms=8, color="C0", mew=2, zorder=4)
     if res.limit_hinges:
