@@ -39,7 +39,10 @@ def _material(text: str):
         raise argparse.ArgumentTypeError(
             f"material {text!r}: expected NAME=density,E,nu (SI units)"
         ) from None
-    return name, Material(rho, E, nu)
+    try:
+        return name, Material(rho, E, nu)
+    except ValueError as exc:  # out of range or implausible: say which constant
+        raise argparse.ArgumentTypeError(f"material {text!r}: {exc}") from None
 
 
 def _joint(text: str):
@@ -417,6 +420,10 @@ def main(argv: list[str] | None = None) -> int:
     except (FileNotFoundError, ValueError) as exc:
         print(f"masonry-fdem: error: {exc}", file=sys.stderr)
         return 2
+    except ArithmeticError as exc:  # a raw NaN/overflow a solver did not explain
+        print(f"masonry-fdem: error: numerical failure ({exc}); check the magnitudes of the "
+              "input (E, density, lengths in m, loads in N)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

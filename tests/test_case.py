@@ -183,7 +183,7 @@ def test_bad_joint_field_is_named_by_its_table():
     assert "joints.mortar: JointMaterial: a tensile strength ft > 0 needs GfI > 0 N/m" in msg
     data = example()
     data["joints"]["ring"] = {"type": "bonded", "kn": -1.0}
-    assert "joints.ring: JointMaterial: kn must be > 0 Pa/m" in problems_of(data)
+    assert "joints.ring.kn: must be > 0, got -1.0 [Pa/m]" in problems_of(data)
     data = example()
     data["joints"]["ring"]["c"] = 1e5
     assert "joints.ring.c: a sand layer (type = 'sand') is friction only" in problems_of(data)

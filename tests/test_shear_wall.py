@@ -13,7 +13,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from masonry_fdem import Material, Model
+from masonry_fdem import Material, Model, checks
 from masonry_fdem.geometry import mesh_blocks
 from masonry_fdem.interactions import JointMaterial, Joints
 from masonry_fdem.interactions.ties import EqualDisplacement
@@ -36,8 +36,9 @@ def _slab(tied: bool, comm=MPI.COMM_SELF):
     blocks = mesh_blocks([base, slab], materials="steel", names=["base", "slab"],
                          mesh_size=0.1, comm=comm)
     model = Model(blocks, {"steel": Material(7850.0, 200e9, 0.3)}, width=0.1, comm=comm)
-    joints = Joints(model, {("steel", "steel"): JointMaterial(kn=1e11, ks=4e10, ft=1e8,
-                                                            c=1e8, GfI=1e6, GfII=1e6)})
+    with checks.expert():  # an unbreakable glue, on purpose
+        glue = JointMaterial(kn=1e11, ks=4e10, ft=1e8, c=1e8, GfI=1e6, GfII=1e6)
+    joints = Joints(model, {("steel", "steel"): glue})
     model.fix_blocks("base")
     model.add_point_load((0.9, 0.1), (0.0, -5e4), live=True)
     inter = [joints]

@@ -65,8 +65,9 @@ import numpy as np
 from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
 from masonry_fdem.assessment.specs import SPREADER, classify_interface
 from masonry_fdem.geometry.arches import arch_centre, arch_parameter
-from masonry_fdem.assessment.thrust import JointThrust
 from masonry_fdem.assessment.report import thrust_lines, write_run_folder
+from masonry_fdem.assessment.thrust import JointThrust
+from masonry_fdem.checks import numerical_failures
 from masonry_fdem.io.rundir import run_folder_problem
 from masonry_fdem.solvers.status import RunStatus, Status
 
@@ -493,6 +494,7 @@ class _RingMonitor(_InterfaceOpenings):
 
 
 # ---------------------------------------------------------------------------- the run
+@numerical_failures("the assessment")
 def assess(
     case: ArchCase | str | Path | Mapping[str, Any],
     *,
@@ -521,6 +523,8 @@ def assess(
 
     Raises:
         CaseError: a bad case, or a run folder that is not free; nothing is written.
+        NumericalError: a solve broke down (NaN, overflow, a PETSc or HiGHS failure), with
+            the likely cause.
     """
     t_start = time.perf_counter()
     if not isinstance(case, ArchCase):
@@ -542,11 +546,16 @@ def assess(
             # FDEM model has as a joint (the sand between rings) at its own tan_phi
             dry = [(on, jm.tan_phi) for on, jm in case.joint_rules()
                    if jm is not None and not jm.bonded and jm.kn is not None]
-            la = case.limit_analysis(friction=lambda _a, _b, mid: next(
-                (mu for on, mu in dry if on(mid)), an.friction))
-            if la.status == "infeasible":
-                log.warning("%s: limit analysis: %s", case.name, la.explanation)
+            try:
+                la = case.limit_analysis(friction=lambda _a, _b, mid: next(
+                    (mu for on, mu in dry if on(mid)), an.friction))
+                if la.status == "infeasible":
+                    log.warning("%s: limit analysis: %s", case.name, la.explanation)
+            except (RuntimeError, ArithmeticError, ValueError) as exc:
+                la = exc  # raised on every rank below, none left waiting
         la = comm.bcast(la if comm.rank == 0 else None, root=0)
+        if isinstance(la, Exception):
+            raise la
     limit_load = float(la.load_factor) if la is not None else None
     if limit_load is not None and not math.isfinite(limit_load):
         limit_load = None

@@ -33,8 +33,11 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
     max_displacement = 0.1        # [m]
     stop_drop = 0.1               # stop once the load has fallen this far below its peak
 
-Every problem is reported at once, naming its key (:class:`~masonry_fdem.assessment.specs.CaseError`).
-Units: SI.
+Every problem is reported at once, naming its key
+(:class:`~masonry_fdem.assessment.specs.CaseError`): each table is checked by its model
+in :mod:`masonry_fdem.assessment.schema` (types, ranges, units, magnitudes;
+``[checks] allow`` as in the arch case files), then the bridge by
+:class:`~masonry_fdem.geometry.bridge.Bridge`. Units: SI.
 """
 
 from __future__ import annotations
@@ -47,11 +50,19 @@ from typing import Any
 
 from mpi4py import MPI
 
+from masonry_fdem import checks
+from masonry_fdem.assessment import schema as S
 from masonry_fdem.assessment.bridge import BridgeRun, Vehicle, bridge_model, load_bridge
-from masonry_fdem.assessment.parse import _JOINT_KEYS, _joint, _joint_values, _load_toml
-from masonry_fdem.assessment.parse import _parse_materials
+from masonry_fdem.assessment.parse import (
+    _Ctx,
+    _load_toml,
+    checks_allow,
+    parse_joint,
+    parse_materials,
+)
+from masonry_fdem.assessment.schema import validate
 from masonry_fdem.assessment.specs import CaseError
-from masonry_fdem.assessment.tables import REQUIRED, Table
+from masonry_fdem.checks import numerical_failures
 from masonry_fdem.geometry.bridge import Bridge, BridgeError, Span
 from masonry_fdem.interactions.joints import JointMaterial
 from masonry_fdem.materials.elastic import Material
@@ -59,10 +70,6 @@ from masonry_fdem.materials.plasticity import MohrCoulomb
 
 __all__ = ["BridgeCase", "load_bridge_case"]
 
-_BRIDGE_KEYS = ("spans", "piers", "pier_height", "abutment_width", "cover", "surfacing",
-                "soil_depth", "soil_margin", "soil_extent", "wall_thickness", "width",
-                "materials", "interface", "mesh")
-_SPAN_KEYS = ("span", "rise", "ring_thickness", "voussoirs", "kind", "rings")
 _PARTS = ("masonry", "pier", "wall", "fill", "surfacing", "soil")
 
 
@@ -80,6 +87,7 @@ class BridgeCase:
     mesh: dict[str, float]
     analysis: dict[str, float] = field(default_factory=dict)
 
+    @numerical_failures("the bridge run")
     def run(self, x: float, comm: MPI.Comm = MPI.COMM_WORLD):
         """Build the model with the vehicle at ``x`` [m] and load it to collapse
         (collective). Returns ``(model, BridgeRun)``."""
@@ -103,107 +111,86 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
     else:
         path = Path(source)
         data, label, name = _load_toml(path), str(path), name or path.stem
-    problems: list[str] = []
-    root = Table(problems, "", data, ("bridge", "materials", "joints", "vehicle", "analysis"))
-    mats = _parse_materials(root)
-    bt = root.table("bridge", _BRIDGE_KEYS, required=True)
-    bridge = None
-    parts: dict[str, str] = {}
-    interface = None
-    mesh: dict[str, float] = {}
-    if bt is not None:
-        spans = []
-        for k, sd in enumerate(bt.tables("spans")):
-            st = Table(problems, f"bridge.spans[{k}]", sd, _SPAN_KEYS)
-            vals = (st.number("span", gt=0.0), st.number("rise", gt=0.0),
-                    st.number("ring_thickness", gt=0.0), st.integer("voussoirs", ge=1),
-                    st.string("kind", "segmental", ("semicircular", "segmental", "pointed")),
-                    st.integer("rings", 1, ge=1))
-            if None not in vals:
-                spans.append(Span(*vals))
-        if not bt.tables("spans"):
-            bt.bad("spans", "missing: at least one [[bridge.spans]] (the fill would lie above "
-                   "no arch)")
-        mt = bt.table("materials", _PARTS, required=True)
-        if mt is not None:
-            for part in _PARTS:
-                default = None if part in ("masonry", "fill") else {
-                    "pier": mt.data.get("masonry"), "wall": mt.data.get("pier",
-                                                                        mt.data.get("masonry")),
-                    "surfacing": "surfacing", "soil": "soil"}[part]
-                v = mt.string(part, default if default is not None else REQUIRED)
-                if isinstance(v, str):
-                    parts[part] = v
-        # the numbers of the bridge; its own checks then run in Bridge
-        kw = {}
-        for key, default, bound in (("pier_height", 1.0, "gt"), ("abutment_width", 1.0, "gt"),
-                                    ("cover", REQUIRED, "gt"), ("surfacing", 0.0, "ge"),
-                                    ("soil_depth", 0.0, "ge"), ("wall_thickness", 0.3, "gt"),
-                                    ("width", 1.0, "gt")):
-            v = bt.number(key, default, **{bound: 0.0})
-            if v is not None:
-                kw[key] = v
-        piers = bt.numbers("piers", ())
-        if "soil_margin" in bt.data:
-            kw["soil_margin"] = bt.number("soil_margin", ge=0.0)
-        if "soil_extent" in bt.data:
-            ext = bt.numbers("soil_extent")
-            if ext is not None and len(ext) != 2:
-                bt.bad("soil_extent", f"must be [x_min, x_max], got {list(ext)}")
-            elif ext is not None:
-                kw["soil_extent"] = ext
-        used = {parts.get("masonry"), parts.get("pier"), parts.get("wall"), parts.get("fill")}
-        if kw.get("surfacing", 0.0) > 0:
-            used.add(parts.get("surfacing"))
-        if kw.get("soil_depth", 0.0) > 0:
-            used.add(parts.get("soil"))
+    ctx = _Ctx()
+    ctx.allow = checks_allow(data, ctx.problems)
+    problems = ctx.problems
+    validate(S.BridgeRootModel, data, "", problems)
+    data = data if isinstance(data, Mapping) else {}
+
+    def table(key):
+        v = data.get(key)
+        return v if isinstance(v, Mapping) else None
+
+    mats = parse_materials(table("materials"), ctx) if table("materials") is not None else {}
+    bm = ctx.table(S.BridgeModel, table("bridge"), "bridge") if table("bridge") else None
+    bridge, interface, parts, mesh = None, None, {}, {}
+    if bm is not None:
+        if not bm.spans:
+            problems.append("bridge.spans: missing: at least one [[bridge.spans]] (the fill "
+                            "would lie above no arch)")
+        spans = [Span(s.span, s.rise, s.ring_thickness, s.voussoirs, s.kind, s.rings)
+                 for s in bm.spans]
+        pm = bm.materials
+        parts = {"masonry": pm.masonry, "pier": pm.pier or pm.masonry,
+                 "wall": pm.wall or pm.pier or pm.masonry, "fill": pm.fill,
+                 "surfacing": pm.surfacing, "soil": pm.soil}
+        kw: dict[str, Any] = dict(pier_height=bm.pier_height, abutment_width=bm.abutment_width,
+                                  cover=bm.cover, surfacing=bm.surfacing,
+                                  soil_depth=bm.soil_depth, wall_thickness=bm.wall_thickness,
+                                  width=bm.width)
+        if bm.soil_margin is not None:
+            kw["soil_margin"] = bm.soil_margin
+        if bm.soil_extent is not None:
+            kw["soil_extent"] = tuple(bm.soil_extent)
+        used = {parts["masonry"], parts["pier"], parts["wall"], parts["fill"]}
+        if bm.surfacing > 0:
+            used.add(parts["surfacing"])
+        if bm.soil_depth > 0:
+            used.add(parts["soil"])
+        known = table("materials") or {}
         for part, m in parts.items():
-            if m in used and "materials" in data and m not in data["materials"]:
+            if m in used and m not in known:
                 problems.append(f"bridge.materials.{part}: no [materials.{m}] in the case")
         for part in ("fill", "soil"):
-            m = parts.get(part)
+            m = parts[part]
             if m in mats and m in used and not isinstance(mats[m], MohrCoulomb):
                 problems.append(f"bridge.materials.{part}: [materials.{m}] is elastic: a "
                                 f"{part} needs c, phi (and psi) for its Mohr–Coulomb strength")
-        mesh_t = bt.table("mesh", _PARTS)
-        for part in _PARTS:
-            v = mesh_t.number(part, None, gt=0.0) if mesh_t is not None else None
-            mesh[part] = v if v is not None else {"fill": 0.2, "surfacing": 0.1, "soil": 0.4,
-                                                  "wall": 0.3, "pier": 0.3}.get(part, 0.2)
-        fm = mats.get(parts.get("fill", ""))
-        it = bt.table("interface", ("tan_phi", "kn", "ks"))
-        mu0 = math.tan(math.radians(2.0 / 3.0 * fm.phi)) if isinstance(fm, MohrCoulomb) else 0.5
-        mu = it.number("tan_phi", mu0, ge=0.0) if it is not None else mu0
-        kn0 = 20.0 * fm.E / mesh["fill"] if fm is not None else 1e9
-        kn = it.number("kn", kn0, gt=0.0) if it is not None else kn0
-        ks = it.number("ks", None, gt=0.0) if it is not None else None
-        if None not in (mu, kn):
-            interface = JointMaterial(kn=kn, ks=ks or kn / 2.6, tan_phi=mu)
-        if not problems and len(spans) == len(bt.tables("spans")):
+        defaults = {"masonry": 0.2, "pier": 0.3, "wall": 0.3, "fill": 0.2, "surfacing": 0.1,
+                    "soil": 0.4}
+        mesh = {part: getattr(bm.mesh, part) or defaults[part] for part in defaults}
+        fm = mats.get(parts["fill"])
+        it = bm.interface
+        mu = it.tan_phi if it.tan_phi is not None else (
+            math.tan(math.radians(2.0 / 3.0 * fm.phi)) if isinstance(fm, MohrCoulomb) else 0.5)
+        kn = it.kn if it.kn is not None else (20.0 * fm.E / mesh["fill"] if fm else 1e9)
+        with checks.expert():  # magnitudes: checked by the schema, with [checks] allow
+            interface = JointMaterial(kn=kn, ks=it.ks or kn / 2.6, tan_phi=mu)
+        if not problems:
             try:
-                bridge = Bridge(spans=tuple(spans), piers=piers or (), materials=dict(parts),
+                bridge = Bridge(spans=tuple(spans), piers=tuple(bm.piers), materials=parts,
                                 **kw)
             except BridgeError as e:
                 problems.append(f"bridge: {e}")
-    joints = root.table("joints", ("mortar",), required=True)
     mortar = None
+    joints = table("joints")
     if joints is not None:
-        mt = joints.table("mortar", _JOINT_KEYS, required=True)
-        vals = _joint_values(mt) if mt is not None else None
-        if vals is not None:
-            mortar = _joint(mt, vals)
+        for key in joints:
+            if key != "mortar":
+                problems.append(f"unknown key {key!r} in [joints] (expected mortar)")
+        if "mortar" not in joints:
+            problems.append("[joints.mortar]: missing table (required)")
+        else:
+            mortar = parse_joint(joints["mortar"], "joints.mortar", ctx)
     vehicle, positions = None, ()
-    vt = root.table("vehicle", ("offsets", "loads", "patch", "positions"), required=True)
-    if vt is not None:
-        offs = vt.numbers("offsets", (0.0,))
-        loads = vt.numbers("loads", tuple(1.0 for _ in (offs or (0.0,))))
-        patch = vt.number("patch", 0.3, gt=0.0)
-        positions = vt.numbers("positions") or ()
-        if None not in (offs, loads, patch):
-            try:
-                vehicle = Vehicle(offs, loads, patch)
-            except BridgeError as e:
-                problems.append(str(e))
+    vm = ctx.table(S.VehicleModel, table("vehicle"), "vehicle") if table("vehicle") else None
+    if vm is not None:
+        positions = tuple(vm.positions)
+        try:
+            vehicle = Vehicle(tuple(vm.offsets), tuple(vm.loads or [1.0] * len(vm.offsets)),
+                              vm.patch)
+        except BridgeError as e:
+            problems.append(str(e))
         if bridge is not None and vehicle is not None:
             for x in positions:
                 for k, (xa, _) in enumerate(vehicle.axles(x)):
@@ -212,21 +199,10 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
                                              f"vehicle.positions: at {x:g} m, axle {k}")
                     except BridgeError as e:
                         problems.append(str(e))
-    analysis = {}
-    at = root.table("analysis", ("increment", "max_displacement", "stop_drop", "max_steps"))
-    if at is not None:
-        for key, kwb in (("increment", dict(gt=0.0)), ("max_displacement", dict(gt=0.0)),
-                         ("stop_drop", dict(gt=0.0, lt=1.0))):
-            v = at.number(key, None, **kwb)
-            if v is not None:
-                analysis[key] = v
-        if "max_steps" in at.data:
-            v = at.integer("max_steps", ge=1)
-            if v is not None:
-                analysis["max_steps"] = v
+    am = ctx.table(S.BridgeAnalysisModel, table("analysis") or {}, "analysis")
+    analysis = {k: v for k, v in (am.model_dump() if am else {}).items() if v is not None}
     if problems:
-        raise CaseError(problems, label)
+        raise CaseError(list(dict.fromkeys(problems)), label)  # each line once
     assert bridge is not None and mortar is not None and vehicle is not None
-    return BridgeCase(name, bridge, mats, mortar, interface, vehicle, tuple(positions), mesh,
+    return BridgeCase(name, bridge, mats, mortar, interface, vehicle, positions, mesh,
                       analysis)
-

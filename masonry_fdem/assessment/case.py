@@ -3,8 +3,15 @@
 :func:`load_case` reads a TOML file (or a dict of the same shape), checks everything and
 returns a frozen :class:`ArchCase`; it never creates a file or folder. Every problem found
 is collected, and all of them are raised together in one :class:`CaseError`, one line
-each, naming the table and key (``arch.ring_thickness: must be > 0, got -0.1``). Unknown
-keys are rejected with the closest known key as a suggestion. :func:`prepare_run_folder`
+each, naming the table and key (``arch.ring_thickness: must be > 0, got -0.1 [m]``).
+Unknown keys are rejected with the closest known key as a suggestion. Each table is
+checked by its typed model (:mod:`masonry_fdem.assessment.schema`, pydantic). Magnitudes
+are checked too: a value outside its plausible range
+(:data:`masonry_fdem.checks.PLAUSIBLE`; the mesh size against the ring thickness, the load
+increment and ``max_load`` against the arch's self-weight) is an error naming the key, its
+unit and range, and the likely slip (``arch.span = 4000 m is implausible ...; did you give
+millimetres?``). An expert who means such a value lists its key in ``[checks] allow =
+["arch.span", ...]`` (``"*"``: every magnitude check off). :func:`prepare_run_folder`
 creates the output folder of a valid case.
 
 Units are SI throughout: m, N, Pa, kg/m³, N/m (fracture energies), Pa/m (joint
@@ -99,6 +106,8 @@ Schema (``*``: required):
     an increment finds no equilibrium, go on from the last equilibrium under displacement
     control (steps of ``displacement_increment``, default a quarter of the load-line
     displacement reached) to find the peak and the post-peak branch.
+``[checks]``
+    ``allow``: keys (``"materials.brick.E"``) whose magnitude checks are switched off.
 ``[[anchors]]``
     Repairs: ``layout``\\* "radial" (``angles``\\*: list of polar angles [deg] about the
     intrados centre, 90 = crown; ``cover`` [m] from intrados and extrados, 0.02) or

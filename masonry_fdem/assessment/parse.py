@@ -1,13 +1,22 @@
 """Parsing and checking an arch case file (TOML or a dict of the same shape) into an
 :class:`~masonry_fdem.assessment.specs.ArchCase`; see :mod:`masonry_fdem.assessment.case`
-for the schema."""
+for the schema.
+
+Each table is checked by its pydantic model (:mod:`.schema`: types, bounds, required and
+unknown keys, units) and by the magnitude checks (:data:`masonry_fdem.checks.PLAUSIBLE`,
+switched off per key by ``[checks] allow``); what is left here are the rules between
+keys and tables (a rise that fits the kind of arch, damage naming existing rings, a load
+on the span, the mesh size against the ring thickness, the load against the arch's
+self-weight). Every problem is collected and raised together in one
+:class:`~masonry_fdem.assessment.specs.CaseError`, one line each, naming its key.
+"""
 
 from __future__ import annotations
 
 import math
 import re
 import tomllib
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import fields
 from pathlib import Path
 from types import MappingProxyType
@@ -15,468 +24,477 @@ from typing import Any
 
 import numpy as np
 
-from masonry_fdem.assessment.specs import S_TOL, TONNE_FORCE, AnalysisSpec, AnchorLayout, AnchorSpec
-from masonry_fdem.assessment.specs import ArchCase, ArchSpec, CaseError, Damage, DamageKind
-from masonry_fdem.assessment.specs import PASSIVE_MOBILISATION, FillSpec, LoadControl, LoadingSpec
-from masonry_fdem.assessment.specs import Objective, SearchSpec
-from masonry_fdem.assessment.tables import REQUIRED, Table, show
+from masonry_fdem import checks
+from masonry_fdem.assessment import schema as S
+from masonry_fdem.assessment.schema import show, validate
+from masonry_fdem.assessment.specs import (
+    PASSIVE_MOBILISATION,
+    S_TOL,
+    TONNE_FORCE,
+    AnalysisSpec,
+    AnchorLayout,
+    AnchorSpec,
+    ArchCase,
+    ArchSpec,
+    CaseError,
+    Damage,
+    DamageKind,
+    FillSpec,
+    LoadControl,
+    LoadingSpec,
+    Objective,
+    SearchSpec,
+)
+from masonry_fdem.constants import G
 from masonry_fdem.geometry.arches import ArchKind, arch_layout
 from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
 from masonry_fdem.interactions.joints import JointMaterial
 from masonry_fdem.materials.elastic import Material
 from masonry_fdem.materials.plasticity import MohrCoulomb
 
-__all__ = ["load_case"]
+__all__ = ["load_case", "parse_joint", "parse_materials"]
 
-_ARCH_KEYS = ("kind", "span", "rise", "rings", "ring_thickness", "voussoirs", "stagger",
-              "segments", "abutment_height", "abutment_width", "width", "mesh_size",
-              "voussoir_material", "abutment_material")
 _JOINT_KEYS = tuple(f.name for f in fields(JointMaterial))
-_COULOMB_KEYS = ("c", "phi", "psi")
-_FILL_KEYS = ("cover", "material", "interface_friction", "interface_stiffness", "mesh_size",
-              "wall_thickness", "passive_mobilisation")
 _SAND_FORBIDDEN = ("ft", "GfI", "c", "GfII")
-_LOADING_KEYS = ("position", "x", "spreader_width", "increment", "max_load", "self_weight",
-                 "control", "displacement_increment", "max_displacement")
-_DAMAGE_KEYS = {
-    DamageKind.RING_SEPARATION: ("type", "rings", "from", "to"),
-    DamageKind.DECAYED_MORTAR: ("type", "rings", "from", "to", "factor"),
-    DamageKind.OPEN_JOINT: ("type", "ring", "index", "position"),
-    DamageKind.MISSING_BRICK: ("type", "ring", "index"),
-}
-_ANALYSIS_KEYS = ("limit_analysis", "friction", "dr_rtol", "max_iterations", "output",
-                  "refinements", "hinge_opening", "penalty_factor", "post_peak_steps",
-                  "post_peak_drop", "follow_peak", "solver", "newton_rtol",
-                  "newton_iterations", "newton_steps")
-_ANCHOR_KEYS = ("layout", "angles", "cover", "start_angle", "end_angle", "depth", "pieces",
-                "positions", "inclination", "length",
-                "diameter", "count", "prestress", "plates", "bond_diameter", "segment", "name",
-                "steel", "bond")
-_STEEL_KEYS = tuple(f.name for f in fields(SteelLaw))
+#: plausible ratios (low, high): mesh size / ring thickness, load increment and maximum
+#: load / the arch's self-weight, displacement increment / span
+MESH_RATIO = (0.01, 2.0)
+INCREMENT_RATIO = (1e-3, 2.0)
+MAX_LOAD_RATIO = (1e-2, 100.0)
+DISPLACEMENT_RATIO = (1e-8, 0.05)
 
 
-def _parse_arch(t: Table) -> ArchSpec | None:
-    kind = t.string("kind", "semicircular", [k.value for k in ArchKind])
-    span = t.number("span", gt=0.0)
-    rings = t.integer("rings", 1, ge=1)
-    thick = t.number("ring_thickness", gt=0.0)
-    counts: tuple[int, ...] | None = None
-    v = t.raw("voussoirs", REQUIRED)
-    if v is not None:
-        vals = v if isinstance(v, list) else [v]
-        if not vals or any(isinstance(a, bool) or not isinstance(a, int) or a < 1 for a in vals):
-            t.bad("voussoirs", f"must be an integer >= 1 or a list of them, got {show(v)}")
-        elif rings is not None and isinstance(v, list) and len(vals) != rings:
-            t.bad("voussoirs", f"{len(vals)} values but the arch has {rings} rings")
-        elif rings is not None:
-            counts = tuple(vals) * (rings if len(vals) == 1 and not isinstance(v, list) else 1)
+def _allow_hint(key: str) -> str:
+    return f'[checks] allow = ["{key}"]'
+
+
+class _Ctx:
+    """The problems found so far and the ``[checks] allow`` list."""
+
+    def __init__(self, allow: tuple[str, ...] = ()):
+        self.problems: list[str] = []
+        self.allow = allow
+        self.implausible: set[str] = set()  # tables with implausible magnitudes
+
+    def table(self, model, data, path):
+        """``data`` validated by ``model`` and its magnitudes checked (None if invalid)."""
+        obj = validate(model, data, path, self.problems)
+        implausible = S.magnitude_problems(obj, path, self.allow)
+        self.problems += implausible
+        self.implausible |= {path} if implausible else set()
+        return obj
+
+    def ratio(self, key, value, ref, bounds, unit, ref_text):
+        msg = checks.ratio_problem(key, value, ref, *bounds, unit, ref_text,
+                                   allow=self.allow, allow_hint=_allow_hint(key))
+        if msg:
+            self.problems.append(msg)
+
+
+# ---------------------------------------------------------------------- tables
+def _parse_arch(m: S.ArchModel, ctx: _Ctx) -> ArchSpec | None:
+    bad = ctx.problems.append
+    ok = True
+    v = m.voussoirs
+    if isinstance(v, list) and len(v) != m.rings:
+        bad(f"arch.voussoirs: {len(v)} values but the arch has {m.rings} rings")
+        ok = False
+    counts = tuple(v) if isinstance(v, list) else (v,) * m.rings
     rise = None
-    if kind is not None and span is not None:
-        if kind == "semicircular":
-            r = t.number("rise", None, gt=0.0)
-            if r is not None and abs(r - 0.5 * span) > 1e-9 * span:
-                t.bad("rise", f"a semicircular arch has rise span/2 = {0.5 * span:g} m, got "
-                      f"{r:g}; use kind = 'segmental' or 'pointed'")
-        elif kind == "segmental":
-            rise = t.number("rise", gt=0.0, lt=0.5 * span)
-        else:
-            rise = t.number("rise", gt=0.5 * span)
-    stagger = t.number("stagger", 0.5, ge=0.0, lt=1.0)
-    segments = t.integer("segments", 1, ge=1)
-    ab_h = t.number("abutment_height", gt=0.0)
-    ab_w = t.number("abutment_width", None, gt=0.0)
-    width = t.number("width", 1.0, gt=0.0)
-    mesh = t.number("mesh_size", None, gt=0.0)
-    vmat = t.string("voussoir_material", "brick")
-    amat = t.string("abutment_material", "abutment")
-    values = (kind, span, rings, thick, counts, stagger, segments, ab_h, width, vmat, amat)
-    if any(a is None for a in values) or (kind != "semicircular" and rise is None):
+    if m.kind == "semicircular":
+        if m.rise is not None and abs(m.rise - 0.5 * m.span) > 1e-9 * m.span:
+            bad(f"arch.rise: a semicircular arch has rise span/2 = {0.5 * m.span:g} m, got "
+                f"{m.rise:g}; use kind = 'segmental' or 'pointed'")
+            ok = False
+    elif m.rise is None:
+        bad(f"arch.rise: missing (required by kind = {m.kind!r})")
+        ok = False
+    elif m.kind == "segmental" and not m.rise < 0.5 * m.span:
+        bad(f"arch.rise: must be < {0.5 * m.span:g} (span/2) for a segmental arch, got "
+            f"{m.rise:g} [m]")
+        ok = False
+    elif m.kind == "pointed" and not m.rise > 0.5 * m.span:
+        bad(f"arch.rise: must be > {0.5 * m.span:g} (span/2) for a pointed arch, got "
+            f"{m.rise:g} [m]")
+        ok = False
+    else:
+        rise = m.rise
+    mesh = m.mesh_size if m.mesh_size is not None else 0.25 * m.ring_thickness
+    if m.mesh_size is not None:
+        ctx.ratio("arch.mesh_size", m.mesh_size, m.ring_thickness, MESH_RATIO, "m",
+                  "the ring thickness")
+    if not ok or "arch" in ctx.implausible:  # an arch in mm: its geometry says nothing more
         return None
-    spec = ArchSpec(ArchKind(kind), span, rise, rings, thick, counts, stagger, segments, ab_h,
-                    ab_w, width, mesh if mesh is not None else 0.25 * thick, vmat, amat)
+    spec = ArchSpec(ArchKind(m.kind), m.span, rise, m.rings, m.ring_thickness, counts,
+                    m.stagger, m.segments, m.abutment_height, m.abutment_width, m.width,
+                    mesh, m.voussoir_material, m.abutment_material)
     try:
-        arch_layout(**spec.layout_kwargs())
+        with checks.expert():  # the magnitudes were checked above, with [checks] allow
+            arch_layout(**spec.layout_kwargs())
     except ValueError as e:
-        t.problems.append(f"arch: {e}")
+        bad(f"arch: {e}")
         return None
     return spec
 
 
-def _parse_materials(root: Table) -> dict[str, Material]:
-    out = {}
-    data = root.raw("materials", REQUIRED)
-    if data is None:
-        return out
+def parse_materials(data: Any, ctx: _Ctx) -> dict[str, Material]:
+    """``[materials.<name>]`` tables -> Material (Mohr–Coulomb with ``phi``)."""
+    out: dict[str, Material] = {}
     if not isinstance(data, Mapping):
-        root.bad("materials", "must be a table of [materials.<name>] tables")
+        ctx.problems.append("materials: must be a table of [materials.<name>] tables")
         return out
-    for name in data:
-        t = Table(root.problems, f"materials.{name}", data[name],
-                  ("density", "E", "nu", *_COULOMB_KEYS))
-        rho, E = t.number("density", gt=0.0), t.number("E", gt=0.0)
-        nu = t.number("nu", gt=-1.0, lt=0.5)
-        coulomb = any(k in t.data for k in _COULOMB_KEYS)
-        if coulomb:
-            # a Mohr–Coulomb soil (the fill): c [Pa], phi, psi [degrees]
-            c = t.number("c", 0.0, ge=0.0)
-            phi = t.number("phi", ge=0.0, lt=90.0)
-            psi = t.number("psi", 0.0, ge=0.0, lt=90.0)
-            if None in (c, phi, psi):
-                continue
-            if psi > phi:
-                t.bad("psi", f"the dilatancy angle {psi:g} exceeds the friction angle {phi:g}")
-                continue
-        if None not in (rho, E, nu):
-            try:
-                out[name] = (MohrCoulomb(density=rho, E=E, nu=nu, c=c, phi=phi, psi=psi)
-                             if coulomb else Material(rho, E, nu))
-            except ValueError as e:
-                root.problems.append(f"materials.{name}: {e}")
+    for name, table in data.items():
+        path = f"materials.{name}"
+        m = ctx.table(S.MaterialModel, table, path)
+        if m is None:
+            continue
+        coulomb = {"c", "phi", "psi"} & m.given()
+        if coulomb and m.phi is None:
+            ctx.problems.append(f"{path}.phi: missing (required by a Mohr–Coulomb material "
+                                f"with {', '.join(sorted(coulomb))})")
+            continue
+        psi, c = m.psi or 0.0, m.c or 0.0
+        if coulomb and psi > m.phi:
+            ctx.problems.append(f"{path}.psi: the dilatancy angle {psi:g} exceeds the "
+                                f"friction angle {m.phi:g}")
+            continue
+        try:
+            with checks.expert():  # magnitudes: checked by ctx.table, with [checks] allow
+                out[name] = (MohrCoulomb(density=m.density, E=m.E, nu=m.nu, c=c, phi=m.phi,
+                                         psi=psi) if coulomb else Material(m.density, m.E, m.nu))
+        except ValueError as e:
+            ctx.problems.append(f"{path}: {e}")
     return out
 
 
-def _parse_fill(t: Table, mats: Mapping[str, Material], arch: ArchSpec | None,
-                data: Mapping[str, Any]) -> FillSpec | None:
-    cover = t.number("cover", gt=0.0)
-    mat = t.string("material", "fill")
-    if mat is not None and mat not in data.get("materials", {}):
-        t.bad("material", f"no [materials.{mat}] in the case")
-        mat = None
-    elif mat is not None and arch is not None and mat in (arch.voussoir_material,
-                                                          arch.abutment_material):
-        t.bad("material", f"{mat!r} is the arch's own material; give the fill its own")
-        mat = None
-    elif mat is not None and mat in mats and not isinstance(mats[mat], MohrCoulomb):
-        t.bad("material", f"[materials.{mat}] is elastic: a fill needs c, phi (and psi) "
-              "for its Mohr–Coulomb strength")
-        mat = None
-    fm = mats.get(mat) if mat is not None else None
-    # default interface friction: tan(2/3 phi) of the fill (a rough wall; Potyondy 1961)
-    mu0 = math.tan(math.radians(2.0 / 3.0 * fm.phi)) if isinstance(fm, MohrCoulomb) else 0.5
-    mu = t.number("interface_friction", mu0, ge=0.0)
-    # default interface stiffness: 20 E_fill / mesh size (stiff beside the fill's own
-    # compliance, like the default penalty of the contact)
-    size = t.number("mesh_size", None, gt=0.0)
-    if size is None and arch is not None:
-        size = 2.0 * arch.mesh_size
-    kn0 = 20.0 * fm.E / size if fm is not None and size else None
-    kn = t.number("interface_stiffness", kn0, gt=0.0)
-    wall = t.number("wall_thickness", 0.3, gt=0.0)
-    # the part of the passive pressure the limit analysis may mobilise (RING's fill model)
-    passive = t.number("passive_mobilisation", PASSIVE_MOBILISATION, ge=0.0, le=1.0)
-    if None in (cover, mat, mu, kn, size, wall, passive):
+def _joint(path: str, vals: dict[str, float], ctx: _Ctx) -> JointMaterial | None:
+    ft, fc = vals.get("ft", 0.0), vals.get("fc")
+    if fc is not None and not ft < fc and not {f"{path}.ft", "*"} & set(ctx.allow):
+        ctx.problems.append(f"{path}.ft = {ft:g} Pa is not below fc = {fc:g} Pa: a "
+                            "tensile strength is a small fraction of the compressive one "
+                            f"(if you mean it: {_allow_hint(path + '.ft')})")
         return None
-    spec = FillSpec(cover, mat, mu, kn, size, wall, passive)
-    return spec
-
-
-def _joint_values(t: Table, skip: Sequence[str] = ()) -> dict[str, float] | None:
-    vals, ok = {}, True
-    for key in _JOINT_KEYS:
-        if key in t.data and key not in skip:
-            vals[key] = t.number(key)
-            ok &= vals[key] is not None
-    return vals if ok else None
-
-
-def _joint(t: Table, vals: dict[str, float]) -> JointMaterial | None:
     try:
-        jm = JointMaterial(**vals)
+        with checks.expert():  # magnitudes: checked by the schema, with [checks] allow
+            jm = JointMaterial(**vals)
         if jm.kn is not None:
             jm.row(1.0, 0.0, 1.0)  # the snap-back checks, which need the stiffness
-        return jm
     except ValueError as e:
-        t.problems.append(f"{t.path}: {e}")
+        ctx.problems.append(f"{path}: {e}")
         return None
+    return jm
 
 
-def _parse_joints(root: Table):
-    joints = root.table("joints", ("mortar", "ring"), required=True)
-    if joints is None:
+def parse_joint(data: Any, path: str, ctx: _Ctx) -> JointMaterial | None:
+    """A ``[joints.mortar]``-like table -> JointMaterial (None, with problems, if bad)."""
+    m = ctx.table(S.JointModel, data, path)
+    return _joint(path, m.values(), ctx) if m is not None else None
+
+
+def _parse_joints(data: Any, ctx: _Ctx):
+    bad = ctx.problems.append
+    if not isinstance(data, Mapping):
+        bad(f"joints: must be a table, got {show(data)}")
         return None, None, "bonded"
-    mortar = ring = None
-    mt = joints.table("mortar", _JOINT_KEYS, required=True)
-    mvals = _joint_values(mt) if mt is not None else None
-    if mvals is not None:
-        mortar = _joint(mt, mvals)
-    rt = joints.table("ring", ("type", *_JOINT_KEYS))
-    if rt is None:
-        return mortar, mortar, "bonded"
-    kind = rt.string("type", "bonded", ("bonded", "sand"))
-    if kind == "sand":
-        for key in _SAND_FORBIDDEN:
-            if key in rt.data:
-                rt.bad(key, "a sand layer (type = 'sand') is friction only; remove the key "
-                       "or use type = 'bonded'")
-        if "tan_phi" not in rt.data:
-            rt.bad("tan_phi", "missing (a sand layer needs its friction coefficient)")
-        rvals = _joint_values(rt, skip=_SAND_FORBIDDEN)
-        if rvals is not None:
-            ring = _joint(rt, rvals)
-    elif kind == "bonded":
-        rvals = _joint_values(rt)
-        if rvals is not None and mvals is not None and mortar is not None:
-            ring = mortar if not rvals else _joint(rt, {**mvals, **rvals})
-    return mortar, ring, kind
-
-
-def _parse_loading(t: Table, span: float | None) -> LoadingSpec | None:
-    pos = None
-    if "position" in t.data and "x" in t.data:
-        t.problems.append(f"{t.path}: give position or x, not both")
-    elif "x" in t.data:
-        x = t.number("x")
-        if x is not None and span is not None:
-            if not 0.0 <= x <= span:
-                t.bad("x", f"{x:g} m is off the arch (0..{span:g} m from the left springing)")
-            else:
-                pos = x / span
+    for key in data:
+        if key not in ("mortar", "ring"):
+            bad(f"unknown key {key!r} in [joints] (expected one of mortar, ring)")
+    if "mortar" not in data:
+        bad("[joints.mortar]: missing table (required)")
+        mm = None
     else:
-        pos = t.number("position", 0.25)
-        if pos is not None and not 0.0 <= pos <= 1.0:
-            # (issue #24: the two conventions named in the message)
-            t.bad("position", f"{pos:g} is off the arch (0..1 of the span): loading.position "
-                  "is a fraction of the span, horizontally from the left springing (unlike "
-                  "the positions s along the arch of [[damage]] and [[anchors]])")
+        mm = ctx.table(S.JointModel, data["mortar"], "joints.mortar")
+    mortar = _joint("joints.mortar", mm.values(), ctx) if mm is not None else None
+    if "ring" not in data:
+        return mortar, mortar, "bonded"
+    rm = ctx.table(S.RingJointModel, data["ring"], "joints.ring")
+    if rm is None:
+        return mortar, None, "bonded"
+    rvals = rm.values()
+    if rm.type == "sand":
+        forbidden = [k for k in _SAND_FORBIDDEN if k in rvals]
+        for key in forbidden:
+            bad(f"joints.ring.{key}: a sand layer (type = 'sand') is friction only; remove "
+                "the key or use type = 'bonded'")
+        if rm.tan_phi is None:
+            bad("joints.ring.tan_phi: missing (a sand layer needs its friction coefficient)")
+        if forbidden or rm.tan_phi is None:
+            return mortar, None, "sand"
+        return mortar, _joint("joints.ring", rvals, ctx), "sand"
+    if mm is None or mortar is None:
+        return mortar, None, "bonded"
+    ring = mortar if not rvals else _joint("joints.ring", {**mm.values(), **rvals}, ctx)
+    return mortar, ring, "bonded"
+
+
+def _parse_fill(m: S.FillModel, mats: Mapping[str, Material], arch: ArchSpec | None,
+                data: Mapping[str, Any], ctx: _Ctx) -> FillSpec | None:
+    bad = ctx.problems.append
+    mat = m.material
+    materials = data.get("materials") if isinstance(data.get("materials"), Mapping) else {}
+    if mat not in materials:
+        bad(f"fill.material: no [materials.{mat}] in the case")
+        return None
+    if arch is not None and mat in (arch.voussoir_material, arch.abutment_material):
+        bad(f"fill.material: {mat!r} is the arch's own material; give the fill its own")
+        return None
+    if mat in mats and not isinstance(mats[mat], MohrCoulomb):
+        bad(f"fill.material: [materials.{mat}] is elastic: a fill needs c, phi (and psi) "
+            "for its Mohr–Coulomb strength")
+        return None
+    fm = mats.get(mat)
+    if fm is None:
+        return None
+    # default interface friction: tan(2/3 phi) of the fill (a rough wall; Potyondy 1961)
+    mu = (m.interface_friction if m.interface_friction is not None
+          else math.tan(math.radians(2.0 / 3.0 * fm.phi)))
+    size = m.mesh_size if m.mesh_size is not None else (
+        2.0 * arch.mesh_size if arch is not None else None)
+    if size is None:
+        return None
+    # default interface stiffness: 20 E_fill / mesh size (stiff beside the fill's own
+    # compliance, like the default penalty of the contact)
+    kn = m.interface_stiffness if m.interface_stiffness is not None else 20.0 * fm.E / size
+    passive = (m.passive_mobilisation if m.passive_mobilisation is not None
+               else PASSIVE_MOBILISATION)
+    return FillSpec(m.cover, mat, mu, kn, size, m.wall_thickness, passive)
+
+
+def _parse_loading(m: S.LoadingModel, span: float | None, ctx: _Ctx) -> LoadingSpec | None:
+    bad = ctx.problems.append
+    pos = None
+    if m.position is not None and m.x is not None:
+        bad("loading: give position or x, not both")
+    elif m.x is not None:
+        if span is not None:
+            if not 0.0 <= m.x <= span:
+                bad(f"loading.x: {m.x:g} m is off the arch (0..{span:g} m from the left "
+                    "springing)")
+            else:
+                pos = m.x / span
+    else:
+        pos = 0.25 if m.position is None else m.position
+        if not 0.0 <= pos <= 1.0:
+            # (the two conventions named in the message)
+            bad(f"loading.position: {pos:g} is off the arch (0..1 of the span): "
+                "loading.position is a fraction of the span, horizontally from the left "
+                "springing (unlike the positions s along the arch of [[damage]] and "
+                "[[anchors]])")
             pos = None
-    spread = t.number("spreader_width", 0.0, ge=0.0)
-    if None not in (pos, spread, span) and (
-            pos - 0.5 * spread / span < -S_TOL or pos + 0.5 * spread / span > 1 + S_TOL):
-        t.bad("spreader_width", f"a {spread:g} m spreader centred at {pos * span:g} m from "
-              f"the left springing runs off the span (0..{span:g} m)")
-    inc = t.number("increment", TONNE_FORCE, gt=0.0)
-    max_load = t.number("max_load", None, gt=0.0)
-    if None not in (inc, max_load) and max_load < inc:
-        t.bad("max_load", f"{max_load:g} N is less than one increment ({inc:g} N)")
-    weight = t.boolean("self_weight", True)
-    control = t.string("control", "load", [c.value for c in LoadControl])
-    dinc = t.number("displacement_increment",
-                    REQUIRED if control == "displacement" else None, gt=0.0)
-    dmax = t.number("max_displacement", None, gt=0.0)
-    if None in (pos, spread, inc, weight, control) or (control == "displacement" and not dinc):
+    spread = m.spreader_width
+    if None not in (pos, span) and (pos - 0.5 * spread / span < -S_TOL
+                                    or pos + 0.5 * spread / span > 1 + S_TOL):
+        bad(f"loading.spreader_width: a {spread:g} m spreader centred at {pos * span:g} m "
+            f"from the left springing runs off the span (0..{span:g} m)")
+    inc = m.increment if m.increment is not None else TONNE_FORCE
+    if m.max_load is not None and m.max_load < inc:
+        bad(f"loading.max_load: {m.max_load:g} N is less than one increment ({inc:g} N)")
+    if m.control == "displacement" and m.displacement_increment is None:
+        bad("loading.displacement_increment: missing (required by control = "
+            "'displacement')")
         return None
-    return LoadingSpec(pos, spread, inc, max_load, weight, LoadControl(control), dinc, dmax)
-
-
-def _ring_index(t: Table, key: str, rings: int | None) -> int | None:
-    k = t.integer(key, ge=0)
-    if k is not None and rings is not None and k >= rings:
-        t.bad(key, f"{k} but the arch has {rings} rings (0..{rings - 1})")
+    if pos is None:
         return None
-    return k
+    return LoadingSpec(pos, spread, inc, m.max_load, m.self_weight, LoadControl(m.control),
+                       m.displacement_increment, m.max_displacement)
 
 
-def _ring_list(t: Table, rings: int | None, pair: bool) -> tuple[int, ...] | None:
-    v = t.raw("rings", "all")
+def _ring_list(path: str, v: Any, rings: int | None, pair: bool, ctx: _Ctx):
+    bad = ctx.problems.append
     if v == "all":
         return None if rings is None else tuple(range(rings))
     if (not isinstance(v, list) or not v or (pair and len(v) != 2)
             or any(isinstance(a, bool) or not isinstance(a, int) for a in v)):
         want = "two ring indices [a, b]" if pair else "a list of ring indices"
-        t.bad("rings", f"must be \"all\" or {want}, got {show(v)}")
+        bad(f"{path}.rings: must be \"all\" or {want}, got {show(v)}")
         return None
-    bad = [a for a in v if a < 0 or (rings is not None and a >= rings)]
-    if bad:
-        t.bad("rings", f"{bad[0]} but the arch has {rings} rings (0..{(rings or 0) - 1})")
+    out_of = [a for a in v if a < 0 or (rings is not None and a >= rings)]
+    if out_of:
+        bad(f"{path}.rings: {out_of[0]} but the arch has {rings} rings (0..{(rings or 0) - 1})")
         return None
     if pair and v[0] == v[1]:
-        t.bad("rings", f"needs two different rings, got {v}")
+        bad(f"{path}.rings: needs two different rings, got {v}")
         return None
     return tuple(sorted(set(v)))
 
 
-def _parse_damage(i: int, data: Any, problems: list[str], arch: ArchSpec | None,
-                  rings: int | None):
+def _parse_damage(i: int, data: Any, arch: ArchSpec | None, rings: int | None, ctx: _Ctx):
     path = f"damage[{i}]"
+    bad = ctx.problems.append
     kind = data.get("type") if isinstance(data, Mapping) else None
-    known = isinstance(kind, str) and kind in {k.value for k in DamageKind}
-    allowed = _DAMAGE_KEYS[DamageKind(kind)] if known else tuple(
-        {k: 0 for keys in _DAMAGE_KEYS.values() for k in keys})
-    t = Table(problems, path, data, allowed)
-    if not t.string("type", choices=[k.value for k in DamageKind]):
+    if kind not in S.DAMAGE_MODELS:
+        known = ", ".join(map(repr, S.DAMAGE_MODELS))
+        bad(f"{path}.type: must be one of {known}, got {show(kind)}" if kind is not None
+            else f"{path}.type: missing (required: one of {known})")
+        return None
+    m = ctx.table(S.DAMAGE_MODELS[kind], data, path)
+    if m is None:
         return None
     kind = DamageKind(kind)
     if kind in (DamageKind.RING_SEPARATION, DamageKind.DECAYED_MORTAR):
         if kind is DamageKind.RING_SEPARATION and rings is not None and rings < 2:
-            problems.append(f"{path}: ring separation needs an arch with 2 or more rings")
+            bad(f"{path}: ring separation needs an arch with 2 or more rings")
             return None
-        which = _ring_list(t, rings, pair=kind is DamageKind.RING_SEPARATION)
-        a, b = t.number("from", 0.0, ge=0.0, le=1.0), t.number("to", 1.0, ge=0.0, le=1.0)
-        if None not in (a, b) and not b > a:
-            t.bad("to", f"must be > from ({a:g}), got {b:g} (from and to are positions s "
-                  "along the arch: 0 left springing, 0.5 crown, 1 right springing; not "
-                  "fractions of the span)")
+        which = _ring_list(path, m.rings, rings, kind is DamageKind.RING_SEPARATION, ctx)
+        if not m.end > m.start:
+            bad(f"{path}.to: must be > from ({m.start:g}), got {m.end:g} (from and to are "
+                "positions s along the arch: 0 left springing, 0.5 crown, 1 right "
+                "springing; not fractions of the span)")
             return None
-        factor = 1.0
-        if kind is DamageKind.DECAYED_MORTAR:
-            factor = t.number("factor", gt=0.0, le=1.0)
-        if None in (which, a, b, factor, arch):
+        if which is None or arch is None:
             return None
-        return Damage(kind, which, a, b, factor)
-    ring = _ring_index(t, "ring", rings)
-    if kind is DamageKind.OPEN_JOINT and "position" in t.data:
-        if "index" in t.data:
-            problems.append(f"{path}: give index or position, not both")
-            return None
-        s = t.number("position", ge=0.0, le=1.0)
-        if None in (ring, s, arch):
-            return None
-        return Damage(kind, ring=ring, index=int(np.argmin(abs(arch.joint_positions(ring) - s))))
-    if "index" not in t.data and kind is DamageKind.OPEN_JOINT:
-        t.bad("index", "missing (give index or position)")
+        return Damage(kind, which, m.start, m.end, getattr(m, "factor", 1.0))
+    if rings is not None and m.ring >= rings:
+        bad(f"{path}.ring: {m.ring} but the arch has {rings} rings (0..{rings - 1})")
         return None
-    j = t.integer("index", ge=0)
-    if None in (ring, j, arch):
+    if kind is DamageKind.OPEN_JOINT and m.position is not None:
+        if m.index is not None:
+            bad(f"{path}: give index or position, not both")
+            return None
+        if arch is None:
+            return None
+        s = m.position
+        return Damage(kind, ring=m.ring,
+                      index=int(np.argmin(abs(arch.joint_positions(m.ring) - s))))
+    if m.index is None:
+        bad(f"{path}.index: missing (give index or position)")
         return None
-    n = arch.blocks_in_ring(ring)
+    if arch is None:
+        return None
+    n, j = arch.blocks_in_ring(m.ring), m.index
     if kind is DamageKind.MISSING_BRICK and j >= n:
-        t.bad("index", f"{j} but ring {ring} has {n} voussoirs (0..{n - 1})")
+        bad(f"{path}.index: {j} but ring {m.ring} has {n} voussoirs (0..{n - 1})")
         return None
     if kind is DamageKind.OPEN_JOINT and j > n:
-        t.bad("index", f"{j} but ring {ring} has joints 0..{n} (0 and {n}: the springings)")
+        bad(f"{path}.index: {j} but ring {m.ring} has joints 0..{n} (0 and {n}: the "
+            "springings)")
         return None
-    return Damage(kind, ring=ring, index=j)
+    return Damage(kind, ring=m.ring, index=j)
 
 
-def _parse_anchor(i: int, data: Any, problems: list[str], arch: ArchSpec | None):
+def _steel_bond(m, path: str, ctx: _Ctx):
+    steel = bond = None
+    try:
+        steel = SteelLaw(**m.steel.values())
+    except ValueError as e:
+        ctx.problems.append(f"{path}.steel: {e}")
+    if m.bond is None:
+        bond = Anchor.__dataclass_fields__["bond"].default_factory()
+    else:
+        try:
+            bond = BondLaw(tuple(m.bond.slip), tuple(m.bond.stress))
+        except ValueError as e:
+            ctx.problems.append(f"{path}.bond: {e}")
+    return steel, bond
+
+
+_USED = {"radial": ("angles", "cover"), "stitch": ("start_angle", "end_angle", "depth",
+                                                   "pieces"),
+         "inclined": ("positions", "inclination", "length", "cover")}
+
+
+def _parse_anchor(i: int, data: Any, arch: ArchSpec | None, ctx: _Ctx):
     path = f"anchors[{i}]"
-    t = Table(problems, path, data, _ANCHOR_KEYS)
-    layout = t.string("layout", choices=("radial", "stitch", "inclined"))
-    kw: dict[str, Any] = dict(
-        diameter=t.number("diameter", gt=0.0), count=t.number("count", 1.0, gt=0.0),
-        prestress=t.number("prestress", 0.0, ge=0.0),
-        plates=t.string("plates", "none", ("none", "start", "end", "both")),
-        bond_diameter=t.number("bond_diameter", None, gt=0.0),
-        segment=t.number("segment", None, gt=0.0), name=t.string("name", f"anchor{i}"))
-    if layout == "radial":
-        kw.update(angles=t.numbers("angles"), cover=t.number("cover", 0.02, ge=0.0))
-    elif layout == "stitch":
-        kw.update(start_angle=t.number("start_angle"), end_angle=t.number("end_angle"),
-                  depth=t.number("depth", gt=0.0), pieces=t.integer("pieces", None, ge=1))
-    elif layout == "inclined":
-        kw.update(positions=t.numbers("positions"),
-                  inclination=t.number("inclination", 90.0, gt=0.0, lt=180.0),
-                  length=t.number("length", None, gt=0.0), cover=t.number("cover", 0.02, ge=0.0))
-    used = {"radial": ("angles", "cover"), "stitch": ("start_angle", "end_angle", "depth",
-                                                      "pieces"),
-            "inclined": ("positions", "inclination", "length", "cover")}
-    for key in sorted({k for v in used.values() for k in v}):
-        if layout in used and key in t.data and key not in used[layout]:
-            t.bad(key, f"not used by layout = {layout!r}")
-    steel, bond = _parse_steel_bond(t, problems, path)
-    optional = ("bond_diameter", "segment", "pieces", "length")
-    if layout is None or steel is None or bond is None or any(
-            v is None for k, v in kw.items() if k not in optional):
+    m = ctx.table(S.AnchorModel, data, path)
+    if m is None:
         return None
-    spec = AnchorSpec(layout, steel=steel, bond=bond, **kw)
+    n0 = len(ctx.problems)
+    given = m.given()
+    for key in sorted({k for v in _USED.values() for k in v}):
+        if key in given and key not in _USED[m.layout]:
+            ctx.problems.append(f"{path}.{key}: not used by layout = {m.layout!r}")
+    need = {"radial": ("angles",), "stitch": ("start_angle", "end_angle", "depth"),
+            "inclined": ("positions",)}[m.layout]
+    for key in need:
+        if getattr(m, key) is None:
+            ctx.problems.append(f"{path}.{key}: missing (required by layout = {m.layout!r})")
+    steel, bond = _steel_bond(m, path, ctx)
+    if len(ctx.problems) > n0:
+        return None
+    kw: dict[str, Any] = dict(diameter=m.diameter, count=m.count, prestress=m.prestress,
+                              plates=m.plates, bond_diameter=m.bond_diameter,
+                              segment=m.segment, name=m.name or f"anchor{i}")
+    if m.layout == "radial":
+        kw.update(angles=tuple(m.angles), cover=m.cover)
+    elif m.layout == "stitch":
+        kw.update(start_angle=m.start_angle, end_angle=m.end_angle, depth=m.depth,
+                  pieces=m.pieces)
+    else:
+        kw.update(positions=tuple(m.positions), inclination=m.inclination, length=m.length,
+                  cover=m.cover)
+    spec = AnchorSpec(m.layout, steel=steel, bond=bond, **kw)
     if arch is not None:
         try:
             spec.build(arch)
         except (ValueError, TypeError) as e:
-            problems.append(f"{path}: {e}")
+            ctx.problems.append(f"{path}: {e}")
             return None
     return spec
 
-_SEARCH_KEYS = ("positions", "counts", "inclinations", "lengths", "prestress", "layouts",
-                "diameter", "bars", "cover", "min_spacing", "steel", "bond", "objective",
-                "target", "keep", "keep_ratio", "coarse", "max_candidates")
-_LAYOUT_KEYS = ("positions", "inclination", "length", "prestress")
 
-
-def _parse_steel_bond(t: Table, problems: list[str], path: str):
-    steel = bond = None
-    st = t.table("steel", _STEEL_KEYS)
-    svals = {k: st.number(k) for k in _STEEL_KEYS if k in st.data} if st else {}
-    if None not in svals.values():
-        try:
-            steel = SteelLaw(**svals)
-        except ValueError as e:
-            problems.append(f"{path}.steel: {e}")
-    bt = t.table("bond", ("slip", "stress"))
-    if bt is None:
-        bond = Anchor.__dataclass_fields__["bond"].default_factory()
-    else:
-        slip, stress = bt.numbers("slip"), bt.numbers("stress")
-        if None not in (slip, stress):
-            try:
-                bond = BondLaw(slip, stress)
-            except ValueError as e:
-                problems.append(f"{path}.bond: {e}")
-    return steel, bond
-
-
-def _parse_search(t: Table, problems: list[str]) -> SearchSpec | None:
-    n0 = len(problems)
-
-    def s_list(key):
-        v = t.numbers(key, None)
-        if v is not None and not all(-S_TOL <= x <= 1 + S_TOL for x in v):
-            t.bad(key, f"every position must be in [0, 1] (s along the arch), got {list(v)}")
-        return v
-
-    positions = s_list("positions") or ()
-    counts = t.raw("counts", [1])
-    if not (isinstance(counts, list) and counts and all(
-            isinstance(c, int) and not isinstance(c, bool) and c >= 1 for c in counts)):
-        t.bad("counts", f"must be a non-empty list of integers >= 1, got {show(counts)}")
-        counts = [1]
-    incl = t.numbers("inclinations", (90.0,)) or (90.0,)
-    if not all(0.0 < a < 180.0 for a in incl):
-        t.bad("inclinations", f"every angle must be in (0, 180) degrees, got {list(incl)}")
-    lengths_raw = t.raw("lengths", ["through"])
-    lengths: list[float | None] = []
-    if not isinstance(lengths_raw, list) or not lengths_raw:
-        t.bad("lengths", f"must be a non-empty list of lengths [m] or \"through\", got "
-                         f"{show(lengths_raw)}")
-    else:
-        for v in lengths_raw:
-            if v == "through":
-                lengths.append(None)
-            elif isinstance(v, int | float) and not isinstance(v, bool) and v > 0 and \
-                    math.isfinite(v):
-                lengths.append(float(v))
-            else:
-                t.bad("lengths", f"every entry must be a length > 0 [m] or \"through\", "
-                                 f"got {show(v)}")
-    prestress = t.numbers("prestress", (0.0,)) or (0.0,)
-    if any(p < 0 for p in prestress):
-        t.bad("prestress", f"forces must be >= 0 [N], got {list(prestress)}")
-    layouts = []
-    for i, d in enumerate(t.tables("layouts")):
-        lt = Table(problems, f"search.layouts[{i}]", d, _LAYOUT_KEYS)
-        pos = lt.numbers("positions")
-        inc = lt.number("inclination", 90.0, gt=0.0, lt=180.0)
-        ell = lt.number("length", None, gt=0.0)
-        pre = lt.number("prestress", 0.0, ge=0.0)
-        if pos is not None and inc is not None and pre is not None:
-            layouts.append(AnchorLayout(tuple(pos), inc, ell, pre))
-    objective = t.string("objective", "gain_per_metre", [o.value for o in Objective])
-    target = t.number("target", None, gt=0.0)
-    if objective == "cheapest" and target is None and "target" not in t.data:
-        t.bad("target", "required by objective = \"cheapest\" (the load to reach [N])")
-    if not positions and not layouts:
-        problems.append("search: give positions (and counts, ...) or [[search.layouts]]")
-    steel, bond = _parse_steel_bond(t, problems, "search")
-    kw = dict(diameter=t.number("diameter", 0.016, gt=0.0), bars=t.number("bars", 1.0, gt=0.0),
-              cover=t.number("cover", 0.02, ge=0.0),
-              min_spacing=t.number("min_spacing", 0.05, ge=0.0),
-              keep=t.integer("keep", 4, ge=1), keep_ratio=t.number("keep_ratio", 0.5, ge=0.0,
-                                                                   le=1.0),
-              coarse=t.boolean("coarse", True),
-              max_candidates=t.integer("max_candidates", 500, ge=1))
-    if len(problems) > n0 or None in kw.values() or None in (steel, bond, objective):
+def _parse_search(m: S.SearchModel, ctx: _Ctx) -> SearchSpec | None:
+    n0 = len(ctx.problems)
+    bad = ctx.problems.append
+    if m.objective == "cheapest" and m.target is None:
+        bad('search.target: required by objective = "cheapest" (the load to reach [N])')
+    if not m.positions and not m.layouts:
+        bad("search: give positions (and counts, ...) or [[search.layouts]]")
+    steel, bond = _steel_bond(m, "search", ctx)
+    if len(ctx.problems) > n0:
         return None
-    spec = SearchSpec(positions=tuple(positions), counts=tuple(counts),
-                      inclinations=tuple(incl), lengths=tuple(lengths),
-                      prestress=tuple(prestress), layouts=tuple(layouts), steel=steel,
-                      bond=bond, objective=Objective(objective), target=target, **kw)
+    layouts = tuple(AnchorLayout(tuple(lt.positions), lt.inclination, lt.length, lt.prestress)
+                    for lt in m.layouts)
+    spec = SearchSpec(positions=tuple(m.positions or ()), counts=tuple(m.counts),
+                      inclinations=tuple(m.inclinations),
+                      lengths=tuple(None if v == "through" else float(v) for v in m.lengths),
+                      prestress=tuple(m.prestress), layouts=layouts, steel=steel, bond=bond,
+                      objective=Objective(m.objective), target=m.target, diameter=m.diameter,
+                      bars=m.bars, cover=m.cover, min_spacing=m.min_spacing, keep=m.keep,
+                      keep_ratio=m.keep_ratio, coarse=m.coarse,
+                      max_candidates=m.max_candidates)
     n = len(spec.candidates())
     if n > spec.max_candidates:
-        problems.append(f"search: {n} candidate layouts, more than max_candidates = "
-                        f"{spec.max_candidates}; narrow the space or raise the limit")
+        bad(f"search: {n} candidate layouts, more than max_candidates = "
+            f"{spec.max_candidates}; narrow the space or raise the limit")
         return None
     return spec
 
+
+def _self_weight(arch: ArchSpec, mats: Mapping[str, Material]) -> float | None:
+    """Weight [N] of the arch's voussoirs (abutments aside), None if unknown."""
+    mat = mats.get(arch.voussoir_material)
+    if mat is None:
+        return None
+    with checks.expert():
+        layout = arch_layout(**arch.layout_kwargs())
+    area = sum(abs(_area(p)) for p, n in zip(layout.polygons, layout.names, strict=True)
+               if n.startswith("voussoir:"))
+    return abs(area) * mat.density * G * arch.width
+
+
+def _area(p: np.ndarray) -> float:
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _magnitudes_against_structure(arch: ArchSpec | None, mats: Mapping[str, Material],
+                                  lm: S.LoadingModel | None, ctx: _Ctx) -> None:
+    """Loads against the self-weight, displacements against the span."""
+    if arch is None or lm is None:
+        return
+    weight = _self_weight(arch, mats)
+    if weight:
+        what = "the arch's self-weight"
+        if lm.increment is not None:
+            ctx.ratio("loading.increment", lm.increment, weight, INCREMENT_RATIO, "N", what)
+        if lm.max_load is not None:
+            ctx.ratio("loading.max_load", lm.max_load, weight, MAX_LOAD_RATIO, "N", what)
+    if lm.displacement_increment is not None:
+        ctx.ratio("loading.displacement_increment", lm.displacement_increment, arch.span,
+                  DISPLACEMENT_RATIO, "m", "the span")
+    if lm.max_displacement is not None:
+        ctx.ratio("loading.max_displacement", lm.max_displacement, arch.span, (1e-6, 1.0),
+                  "m", "the span")
 
 
 def _load_toml(path: Path) -> dict[str, Any]:
@@ -494,6 +512,14 @@ def _load_toml(path: Path) -> dict[str, Any]:
         raise CaseError(f"{where}TOML syntax error: {msg}", str(path)) from None
 
 
+def checks_allow(data: Any, problems: list[str]) -> tuple[str, ...]:
+    """The ``[checks] allow`` list of a case (keys whose magnitude checks are off)."""
+    if not isinstance(data, Mapping) or "checks" not in data:
+        return ()
+    m = validate(S.ChecksModel, data["checks"], "checks", problems)
+    return tuple(m.allow) if m is not None else ()
+
+
 def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None) -> ArchCase:
     """Read and check a case; never writes anything.
 
@@ -507,7 +533,9 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
 
     Raises:
         CaseError: unreadable file, TOML syntax error (with its line), or every problem of
-            the case, one per line.
+            the case, one per line: a bad type or range, an unknown or missing key, an
+            implausible magnitude (``[checks] allow`` lets an expert keep it), a rule
+            between keys.
     """
     if isinstance(source, Mapping):
         data, path, label = source, None, None
@@ -516,65 +544,70 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         path = Path(source)
         data, label = _load_toml(path), str(path)
         name = name or path.stem
-    problems: list[str] = []
-    root = Table(problems, "", data, ("arch", "materials", "joints", "loading", "damage",
-                                       "analysis", "anchors", "search", "fill"))
-    at = root.table("arch", _ARCH_KEYS, required=True)
-    arch = _parse_arch(at) if at is not None else None
-    mats = _parse_materials(root)
-    if at is not None:
-        for key, default in (("voussoir_material", "brick"), ("abutment_material", "abutment")):
-            m = at.data.get(key, default)
-            if isinstance(m, str) and isinstance(data.get("materials"), Mapping) and (
-                    m not in data["materials"]):
-                have = ", ".join(map(repr, data["materials"])) or "none"
-                problems.append(f"materials: no material {m!r} (used by arch.{key}); "
-                                f"the case defines {have}")
-    mortar, ring, ring_type = _parse_joints(root)
-    span = arch.span if arch else None
-    if span is None and at is not None:  # a bad arch elsewhere still lets us check the load
-        sv = at.data.get("span")
+    ctx = _Ctx()
+    ctx.allow = checks_allow(data, ctx.problems)
+    validate(S.RootModel, data, "", ctx.problems)  # the tables there are, their types
+    data = data if isinstance(data, Mapping) else {}
+
+    def table(key):  # a table given as one (else None: the root's check said why)
+        v = data.get(key)
+        return v if isinstance(v, Mapping) else None
+
+    def tables(key):  # an array of tables
+        v = data.get(key, [])
+        return [e for e in v if isinstance(e, Mapping)] if isinstance(v, list) else []
+
+    am = ctx.table(S.ArchModel, table("arch"), "arch") if table("arch") is not None else None
+    arch = _parse_arch(am, ctx) if am is not None else None
+    mats = parse_materials(table("materials"), ctx) if table("materials") is not None else {}
+    materials = data.get("materials")
+    if am is not None and isinstance(materials, Mapping):
+        for key in ("voussoir_material", "abutment_material"):
+            m = getattr(am, key)
+            if m not in materials:
+                have = ", ".join(map(repr, materials)) or "none"
+                ctx.problems.append(f"materials: no material {m!r} (used by arch.{key}); "
+                                    f"the case defines {have}")
+    mortar, ring, ring_type = (_parse_joints(table("joints"), ctx) if table("joints")
+                               is not None else (None, None, "bonded"))
+    span = arch.span if arch else (am.span if am is not None else None)
+    if span is None and isinstance(data.get("arch"), Mapping):  # a bad arch elsewhere
+        sv = data["arch"].get("span")
         span = float(sv) if isinstance(sv, int | float) and sv > 0 else None
-    lt = root.table("loading", _LOADING_KEYS) or Table(problems, "loading", {}, ())
-    loading = _parse_loading(lt, span)
-    rings = arch.rings if arch else None
-    if rings is None and at is not None:  # a bad arch elsewhere still lets us check indices
-        rv = at.data.get("rings", 1)
+    lm = ctx.table(S.LoadingModel, table("loading") or {}, "loading")
+    loading = _parse_loading(lm, span, ctx) if lm is not None else None
+    rings = arch.rings if arch else (am.rings if am is not None else None)
+    if rings is None and isinstance(data.get("arch"), Mapping):
+        rv = data["arch"].get("rings", 1)
         rings = rv if isinstance(rv, int) and not isinstance(rv, bool) and rv >= 1 else None
-    damage = [_parse_damage(i, d, problems, arch, rings)
-              for i, d in enumerate(root.tables("damage"))]
-    anchors = [_parse_anchor(i, a, problems, arch) for i, a in enumerate(root.tables("anchors"))]
-    st = root.table("search", _SEARCH_KEYS)
-    search = _parse_search(st, problems) if st is not None else None
-    ft = root.table("fill", _FILL_KEYS)
-    fill = _parse_fill(ft, mats, arch, data) if ft is not None else None
-    if ft is not None and fill is not None and loading is not None and not (
-            loading.spreader_width > 0):
-        ft.problems.append("loading: a load on the fill needs a loading beam "
-                           "(spreader_width > 0): a point load would punch into the soil")
-    an = root.table("analysis", _ANALYSIS_KEYS) or Table(problems, "analysis", {}, ())
-    analysis = AnalysisSpec(
-        an.boolean("limit_analysis", True),
-        an.number("friction", mortar.tan_phi if mortar else 0.6, ge=0.0),
-        an.number("dr_rtol", 1e-6, gt=0.0),
-        an.integer("max_iterations", 200_000, ge=1),
-        Path(an.string("output", f"runs/{name}") or "."),
-        an.integer("refinements", 4, ge=0),
-        an.number("hinge_opening", 1e-4, gt=0.0),
-        an.number("penalty_factor", 20.0, gt=0.0),
-        an.integer("post_peak_steps", 3, ge=1),
-        an.number("post_peak_drop", 0.2, gt=0.0),
-        an.boolean("follow_peak", True),
-        an.string("solver", "newton", ["newton", "dr"]),
-        an.number("newton_rtol", 1e-6, gt=0.0),
-        an.integer("newton_iterations", 25, ge=1),
-        an.integer("newton_steps", 400, ge=1))
-    if analysis.post_peak_drop is not None and not analysis.post_peak_drop < 1.0:
-        an.bad("post_peak_drop", f"must be < 1, got {analysis.post_peak_drop:g}")
-    if not problems and None in (arch, mortar, ring, loading):
+    damage = [_parse_damage(i, d, arch, rings, ctx) for i, d in enumerate(tables("damage"))]
+    anchors = [_parse_anchor(i, a, arch, ctx) for i, a in enumerate(tables("anchors"))]
+    search = None
+    if table("search") is not None:
+        sm = ctx.table(S.SearchModel, table("search"), "search")
+        search = _parse_search(sm, ctx) if sm is not None else None
+    fill = None
+    if table("fill") is not None:
+        fmod = ctx.table(S.FillModel, table("fill"), "fill")
+        fill = _parse_fill(fmod, mats, arch, data, ctx) if fmod is not None else None
+        if fill is not None and loading is not None and not loading.spreader_width > 0:
+            ctx.problems.append("loading: a load on the fill needs a loading beam "
+                                "(spreader_width > 0): a point load would punch into the soil")
+    an = ctx.table(S.AnalysisModel, table("analysis") or {}, "analysis")
+    analysis = None
+    if an is not None:
+        analysis = AnalysisSpec(
+            an.limit_analysis,
+            an.friction if an.friction is not None else (mortar.tan_phi if mortar else 0.6),
+            an.dr_rtol, an.max_iterations, Path(an.output or f"runs/{name}"), an.refinements,
+            an.hinge_opening, an.penalty_factor, an.post_peak_steps, an.post_peak_drop,
+            an.follow_peak, an.solver, an.newton_rtol, an.newton_iterations, an.newton_steps)
+    _magnitudes_against_structure(arch, mats, lm, ctx)
+    problems = ctx.problems
+    if not problems and None in (arch, mortar, ring, loading, analysis):
         problems.append("the case is incomplete")  # a check above forgot to say why
     if problems:
-        raise CaseError(problems, label)
+        raise CaseError(list(dict.fromkeys(problems)), label)  # each line once
     case = ArchCase(name, arch, MappingProxyType(dict(mats)), mortar, ring, ring_type, loading,
                     tuple(damage), analysis, tuple(anchors), path, search, fill)
     if fill is not None:

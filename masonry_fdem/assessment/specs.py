@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_fdem import checks
 from masonry_fdem.assessment.layouts import inclined_anchors, intrados_stitch, radial_anchors
 from masonry_fdem.constants import G
 from masonry_fdem.geometry.arches import ArchKind, arch_layout, arch_parameter, ring_pieces
@@ -136,7 +137,8 @@ class FillSpec:
     def interface(self) -> JointMaterial:
         """The fill's interface as a friction-only joint material."""
         k = self.interface_stiffness
-        return JointMaterial(kn=k, ks=k / 2.6, tan_phi=self.interface_friction)
+        with checks.expert():  # checked in the case file (with its [checks] allow)
+            return JointMaterial(kn=k, ks=k / 2.6, tan_phi=self.interface_friction)
 
 
 @dataclass(frozen=True)
@@ -559,8 +561,9 @@ class ArchCase:
         base = self.mortar if kind == "joint" else self.ring_joint
         if factor == 1.0:
             return base
-        return replace(base, ft=base.ft * factor, c=base.c * factor,
-                       fc=None if base.fc is None else base.fc * factor)
+        with checks.expert():  # a decayed mortar may be weaker than any fresh one
+            return replace(base, ft=base.ft * factor, c=base.c * factor,
+                           fc=None if base.fc is None else base.fc * factor)
 
     def limit_analysis(self, passive: bool = True, **kw: Any):
         """Rigid-block collapse load of the case by

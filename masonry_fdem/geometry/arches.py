@@ -43,6 +43,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry_fdem.checks import check_magnitude, check_ratio
 from masonry_fdem.geometry.blockmesh import BlockMesh
 from masonry_fdem.geometry.layout import BlockLayout
 
@@ -263,6 +264,13 @@ def arch_layout(
         raise ValueError(f"voussoirs must be >= 1, one value or one per ring ({rings})")
     if segments < 1:
         raise ValueError(f"segments must be >= 1, got {segments}")
+    # magnitudes, after the hard checks (off inside masonry_fdem.checks.expert())
+    check_magnitude("span", span, "span", "arch_layout")
+    if rise is not None:
+        check_magnitude("rise", rise, "rise", "arch_layout")
+    check_magnitude("ring_thickness", ring_thickness, "ring_thickness", "arch_layout")
+    check_ratio("ring_thickness", ring_thickness, span, 1e-3, 1.0, "m", "the span",
+                "arch_layout")
     t = float(ring_thickness)
     pieces = [ring_pieces(counts[k], stagger * k) for k in range(rings)]
     params = [_piece_params(pieces[k], counts[k], segments) for k in range(rings)]
@@ -306,5 +314,10 @@ def arch_layout(
 
 def build_arch(*, mesh_size: float | None = None, comm: Any | None = None,
                **layout: Any) -> BlockMesh:
-    """Mesh :func:`arch_layout` (same keyword arguments); see :func:`mesh_blocks`."""
+    """Mesh :func:`arch_layout` (same keyword arguments); see :func:`mesh_blocks`.
+    A ``mesh_size`` [m] outside 1/100 to 2 ring thicknesses is refused as implausible
+    (:func:`masonry_fdem.checks.expert` allows it)."""
+    if mesh_size is not None and "ring_thickness" in layout:
+        check_ratio("mesh_size", mesh_size, layout["ring_thickness"], 0.01, 2.0, "m",
+                    "the ring thickness", "build_arch")
     return arch_layout(**layout).mesh(mesh_size, comm)

@@ -43,8 +43,8 @@ def precompile() -> None:
     scatter_rows(np.zeros((2, 3)), np.zeros(2, dtype=np.int64), np.zeros((3, 3)))
     strain = np.array([[1e-3, -2e-3, 5e-4], [1e-3, -2e-3, 5e-4]])
     qps = np.arange(2, dtype=np.int64)
-    for law in (MohrCoulomb(density=1.0, E=1e6, nu=0.2, c=100.0, phi=30.0),
-                DruckerPrager(density=1.0, E=1e6, nu=0.2, c=100.0, phi=30.0, viscosity=1.0)):
+    for law in (MohrCoulomb(density=2000.0, E=1e6, nu=0.2, c=100.0, phi=30.0),
+                DruckerPrager(density=2000.0, E=1e6, nu=0.2, c=100.0, phi=30.0, viscosity=1.0)):
         for hyp in ("plane_strain", "plane_stress"):
             s0 = np.zeros((2, PK.N_STATE))
             PK.plastic_update(strain, s0, s0.copy(), np.zeros((2, 4)), np.zeros(2), qps,

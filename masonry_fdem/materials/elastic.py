@@ -21,6 +21,8 @@ from enum import Enum
 
 import ufl
 
+from masonry_fdem.checks import check_magnitude
+
 __all__ = [
     "Hypothesis",
     "Material",
@@ -48,6 +50,12 @@ class Material:
         E: Young's modulus [Pa], > 0.
         nu: Poisson's ratio, -1 < ν < 0.5.
 
+    Raises:
+        ValueError: a constant out of its mathematical range;
+            :class:`~masonry_fdem.checks.ImplausibleValueError` one out of the plausible
+            range of :data:`~masonry_fdem.checks.PLAUSIBLE` (E in 1e5..1e12 Pa, density in
+            100..12000 kg/m³), unless allowed by :func:`masonry_fdem.checks.expert`.
+
     A subclass changes the law by overriding :meth:`second_piola` (a stress from the
     Green–Lagrange strain) or :meth:`first_piola`, and may keep history variables at the
     quadrature points (:meth:`history`, :meth:`trial_history`); see
@@ -71,6 +79,9 @@ class Material:
             raise ValueError(f"Young's modulus E must be > 0 Pa, got {self.E}")
         if not -1.0 < self.nu < 0.5:
             raise ValueError(f"Poisson's ratio nu must satisfy -1 < nu < 0.5, got {self.nu}")
+        # magnitudes (off inside masonry_fdem.checks.expert())
+        check_magnitude("density", self.density, "density", type(self).__name__)
+        check_magnitude("E", self.E, "E", type(self).__name__)
 
     # ---------------------------------------------------------------- the law (UFL)
     def second_piola(self, k):

@@ -657,7 +657,13 @@ def limit_analysis(
                            [], velocities, itf, names, fixed, dead_load_mechanism=mechanism,
                            friction_factor=factor)
     if res.status != 0:
-        raise RuntimeError(f"limit analysis LP failed: {res.message}")
+        from masonry_fdem.checks import NumericalError
+
+        raise NumericalError(
+            f"the limit analysis failed: HiGHS found no verdict on its linear program "
+            f"(status {res.status}: {res.message}); likely cause: a badly scaled problem "
+            "(a span in millimetres, a density or load far off, blocks of very different "
+            "sizes) or a structure without supports")
 
     lam = float(res.x[-1]) * scale_dead / scale_live
     bounded_forces = res.x[4 * n_int:-1] * scale_dead

@@ -51,6 +51,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from masonry_fdem.checks import ImplausibleValueError, check_magnitude, is_allowed
 from masonry_fdem.geometry.blockmesh import unit_name
 from masonry_fdem.interactions._sums import gather_rows, node_lists
 from masonry_fdem.interactions.joints import _kernels as JK
@@ -127,6 +128,18 @@ class JointMaterial:
             need(self.kappa_p > 0 and self.Gfc > 0, "a cap needs kappa_p > 0 and Gfc > 0")
         if self.psi_confinement is not None:
             need(self.psi_confinement < 0, "psi_confinement must be < 0 Pa (compression)")
+        # magnitudes (off inside masonry_fdem.checks.expert())
+        for name, kind in (("kn", "stiffness"), ("ks", "stiffness"), ("ft", "ft"), ("c", "c"),
+                           ("fc", "fc"), ("tan_phi", "tan_phi"), ("GfI", "Gf"),
+                           ("GfII", "Gf")):
+            check_magnitude(name, getattr(self, name), kind, "JointMaterial")
+        if self.fc is not None:
+            check_magnitude("Gfc", self.Gfc, "Gfc", "JointMaterial")
+            if not self.ft < self.fc and not is_allowed("ft", "fc"):
+                raise ImplausibleValueError(
+                    f"JointMaterial: ft = {self.ft:.4g} Pa is not below fc = {self.fc:.4g} Pa: "
+                    "a tensile strength is a small fraction of the compressive one (if you "
+                    "mean it: masonry_fdem.checks.expert('ft'))", "ft", self.ft)
 
     @property
     def bonded(self) -> bool:
