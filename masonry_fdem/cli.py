@@ -162,12 +162,46 @@ def cmd_assess(args) -> int:
     from masonry_fdem.assessment.assess import assess
     from masonry_fdem.assessment.case import load_case
     from masonry_fdem.assessment.report import status_text
+    from masonry_fdem.io.checkpoint import (
+        EXIT_INTERRUPTED,
+        CheckpointError,
+        Interrupted,
+        read_manifest,
+        stop_on_signals,
+    )
 
     comm = MPI.COMM_WORLD
+    out = args.out
+    if args.resume is not None:
+        if args.case is not None or out is not None:
+            raise ValueError("--resume RUN_DIR takes the case and the folder from the run")
+        out = args.resume
+        manifest, error = None, None
+        if comm.rank == 0:
+            try:
+                manifest = read_manifest(out)
+            except CheckpointError as exc:
+                error = str(exc)
+        manifest, error = comm.bcast((manifest, error), root=0)
+        if error:
+            if comm.rank == 0:
+                print(f"masonry-fdem: {error}", file=sys.stderr)
+            return 1
+        if not manifest.get("case_file"):
+            raise ValueError(f"the run in {out} did not come from a case file")
+        args.case = Path(manifest["case_file"])
+    elif args.case is None:
+        raise ValueError("give a case file, or --resume RUN_DIR")
     case = load_case(args.case)  # every problem of the file, before anything is written
     try:
-        res = assess(case, out=args.out, overwrite=args.overwrite,
-                     progress=_progress(args), comm=comm)
+        with stop_on_signals():
+            res = assess(case, out=out, overwrite=args.overwrite,
+                         progress=_progress(args), comm=comm,
+                         resume=args.resume is not None)
+    except Interrupted as exc:
+        if comm.rank == 0:
+            print(f"\nmasonry-fdem: {exc}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except RuntimeError as exc:  # no equilibrium under self-weight, a folder not written
         if comm.rank == 0:
             print(f"masonry-fdem: {exc}", file=sys.stderr)
@@ -374,11 +408,17 @@ def build_parser() -> argparse.ArgumentParser:
              "[kN] and the load-line displacement [mm]; when stdout is not a terminal (a\n"
              "log file, a pipe), one line per increment: load factor (the load over the\n"
              "limit-analysis load, - without limit analysis), load [kN], displacement\n"
-             "[mm], dynamic relaxation or Newton iterations, status.")
-    q.add_argument("case", type=Path, help="case file (TOML; masonry-fdem example)")
+             "[mm], dynamic relaxation or Newton iterations, status.\n\n"
+             "Ctrl-C or SIGTERM stops the run at the next converged increment with a\n"
+             "checkpoint in the run folder (exit status 130); --resume RUN_DIR goes on\n"
+             "from it and ends as the run would have (docs/checkpoint.md).")
+    q.add_argument("case", type=Path, nargs="?",
+                   help="case file (TOML; masonry-fdem example); not with --resume")
     q.add_argument("--out", type=Path, default=None,
                    help="run folder (default: analysis.output of the case)")
     q.add_argument("--overwrite", action="store_true", help="reuse a non-empty run folder")
+    q.add_argument("--resume", type=Path, default=None, metavar="RUN_DIR",
+                   help="go on with a run stopped by Ctrl-C or SIGTERM, from its checkpoint")
     q.set_defaults(func=cmd_assess)
     q = _sub(sub, "repair", "unstrengthened against anchored, and/or an anchor "
              "layout search ([search]); reports in a run folder",

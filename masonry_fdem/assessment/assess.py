@@ -504,6 +504,8 @@ def assess(
     comm: MPI.Comm = MPI.COMM_WORLD,
     write: bool = True,
     callback: Callable[[dict], None] | None = None,
+    resume: bool = False,
+    checkpoint_every: int = 10,
 ) -> Assessment:
     """Load an arch case to collapse and report it (collective; see the module doc).
 
@@ -520,27 +522,69 @@ def assess(
         write: write the run folder (False: compute only).
         callback: called on every rank after each converged step with
             ``{"load": N, "displacement": m, "iterations": int}``.
+        resume: go on from the checkpoint in the run folder (same case, same number of
+            ranks) instead of starting afresh; the result is the one the run would have
+            given (bit for bit).
+        checkpoint_every: under the Newton solver (with ``write``), write a checkpoint
+            into ``<run folder>/checkpoint`` every this many converged increments of the
+            path (0: only on a stop); removed when the run finishes. A stop requested
+            by a signal (:func:`~masonry_fdem.io.checkpoint.stop_on_signals`) ends the
+            run at the next converged increment with a checkpoint and
+            :class:`~masonry_fdem.io.checkpoint.Interrupted`.
 
     Raises:
         CaseError: a bad case, or a run folder that is not free; nothing is written.
         NumericalError: a solve broke down (NaN, overflow, a PETSc or HiGHS failure), with
             the likely cause.
+        CheckpointError: ``resume`` without a usable checkpoint (none, corrupt, another
+            number of ranks, or the case changed since the run began).
+        Interrupted: stopped on request after writing a checkpoint.
     """
+    from masonry_fdem.io.checkpoint import (
+        Checkpointer,
+        CheckpointError,
+        Interrupted,
+        rearm,
+        stop_requested,
+    )
+
     t_start = time.perf_counter()
     if not isinstance(case, ArchCase):
         case = load_case(case)
     folder = Path(out) if out is not None else case.analysis.output
-    if write:
+    if resume and not write:
+        raise ValueError("resume needs the run folder (write=True)")
+    if write and not resume:
         error = run_folder_problem(folder, overwrite=overwrite, comm=comm)
+        if error and (folder / "checkpoint" / "CURRENT").is_file():
+            error += f" (it holds the checkpoint of a stopped run: --resume {folder})"
         if error:
             raise CaseError(error, str(case.source) if case.source else None)
+    ck = None
+    if write and case.analysis.solver == "newton":
+        ck = Checkpointer(folder, comm, kind="assess", every=checkpoint_every,
+                          meta={"case": case.name, "case_sha256": case_digest(case),
+                                "case_file": (str(Path(case.source).resolve())
+                                              if case.source else None)})
+    resumed = None
+    if resume:
+        if ck is None:
+            raise CheckpointError(f"{case.name}: only runs of analysis.solver = \"newton\" "
+                                  "are checkpointed; this one cannot be resumed")
+        manifest, resumed = ck.read()
+        elapsed0 = float(resumed["assess"]["elapsed"])
+        if comm.rank == 0:
+            log.info("%s: resuming from %s (increment %d)", case.name,
+                     manifest["generation"], manifest["step"])
     from masonry_fdem.io import ProgressBar
     from masonry_fdem.solvers import DynamicRelaxation
 
     ld = case.loading
     an = case.analysis
     la = None
-    if an.limit_analysis:
+    if resumed is not None:
+        la = resumed["assess"]["la"]
+    elif an.limit_analysis:
         if comm.rank == 0:
             # no bond in the LP: joints slide at `friction`, a friction-only layer that the
             # FDEM model has as a joint (the sand between rings) at its own tan_phi
@@ -561,6 +605,7 @@ def assess(
         limit_load = None
 
     model, inter, anchors = build_model(case, comm)
+    rearm()  # (the mesh generator resets the signal handlers)
     monitor = _JointMonitor(case, model, next((i for i in inter if i.name == "joints"), None))
     rings = _RingMonitor(case, model)
     points = case.load_points()
@@ -579,6 +624,8 @@ def assess(
 
         solver = StaticSolver(model, interactions=_with(inter, anchors), rtol=an.newton_rtol,
                               max_it=an.newton_iterations)
+    it0 = 0  # (a resumed run takes it from the checkpoint)
+    if newton and resumed is None:
         st0 = _settle(solver, next((i for i in inter if i.name == "joints"), None), case)
         ok, why = st0.status is Status.LOAD_REACHED, st0.detail
         if not ok:
@@ -609,7 +656,7 @@ def assess(
                                f"({why}): the arch cannot stand (or try analysis.solver = "
                                "\"dr\")")
         it0 = sum(r.iterations for r in solver.results)
-    else:
+    elif resumed is None:
         dr = DynamicRelaxation(model, interactions=_with(inter, anchors), rtol=an.dr_rtol,
                                ke_tol=math.inf, max_iter=an.max_iterations, damping="velocity")
         res = dr.solve(0.0)
@@ -637,7 +684,37 @@ def assess(
 
     # load-line displacement: mean vertical displacement of the nodes nearest the points
     load_nodes = [model.nearest_node(p, case.load_blocks()) for p in points]
-    u_sw = _mean_uy(model, load_nodes)
+    u_sw = _mean_uy(model, load_nodes) if resumed is None else 0.0
+    best = {"load": -math.inf}
+    open_at_collapse: list = []
+    anchors_at_collapse: list = state["anchors"]
+
+    def run_state() -> dict:
+        """This rank's record of the run so far (for a checkpoint)."""
+        return {"loads": loads, "disps": disps, "iters": iters, "events": events,
+                "seen": seen, "state": state, "anchor_peaks": anchor_peaks,
+                "snapshots": snapshots, "separation": separation, "best": best,
+                "monitor_base": monitor.base, "rings_base": rings.base, "u_sw": u_sw,
+                "open_at_collapse": open_at_collapse,
+                "anchors_at_collapse": anchors_at_collapse, "it0": it0, "la": la,
+                "elapsed": elapsed0 + time.perf_counter() - t_start}
+
+    elapsed0 = 0.0 if resumed is None else elapsed0
+    if resumed is not None:
+        r = resumed["assess"]
+        it0, u_sw = r["it0"], r["u_sw"]
+        monitor.base, rings.base = r["monitor_base"], r["rings_base"]
+        for mine, theirs in ((loads, r["loads"]), (disps, r["disps"]), (iters, r["iters"]),
+                             (events, r["events"])):
+            mine[:] = theirs
+        for mine, theirs in ((state, r["state"]), (anchor_peaks, r["anchor_peaks"]),
+                             (snapshots, r["snapshots"]), (separation, r["separation"]),
+                             (best, r["best"])):
+            mine.clear()
+            mine.update(theirs)
+        seen.update(r["seen"])
+        open_at_collapse = r["open_at_collapse"]
+        anchors_at_collapse = r["anchors_at_collapse"]
 
     def record(load: float, iterations: int) -> None:
         disp = u_sw - _mean_uy(model, load_nodes)
@@ -687,9 +764,11 @@ def assess(
                           open=len({k for k, _ in seen}))
         if callback is not None:
             callback({"load": load, "displacement": disp, "iterations": iterations})
+        if ck is None and comm.allreduce(stop_requested(), op=MPI.LOR):
+            raise Interrupted(folder, len(loads) - 1, (
+                f"interrupted: {case.name} stopped at step {len(loads) - 1}; dynamic "
+                "relaxation runs write no checkpoint: run the case again to finish it"))
 
-    open_at_collapse: list = []
-    anchors_at_collapse: list = state["anchors"]
     collapse, resolution = 0.0, 0.0
     status: RunStatus | None = None
     if newton:
@@ -698,7 +777,6 @@ def assess(
         span_t = case.arch.rings * case.arch.ring_thickness
         d_inc = ld.displacement_increment or 1e-5 * case.arch.span
         d_max = ld.max_displacement or 0.5 * span_t
-        best = {"load": -math.inf}
 
         def on_point(p) -> None:
             nonlocal open_at_collapse, anchors_at_collapse
@@ -719,7 +797,17 @@ def assess(
         # at its middle gives; dynamic relaxation's "displacement" is a rigid platen)
         for p in points:
             model.add_point_load(p, (0.0, -1.0 / len(points)), blocks=case.load_blocks())
-        run = solver.follow(d_inc, **common)
+        path = None
+        if resumed is not None:
+            solver.set_checkpoint_state(resumed["solver"])
+            path = resumed["path"]
+
+        def safe_point(steps: int, path_state: dict) -> None:
+            ck.safe_point(steps, lambda: {"solver": solver.checkpoint_state(),
+                                          "path": path_state, "assess": run_state()})
+
+        run = solver.follow(d_inc, **common, safe_point=safe_point if ck else None,
+                            resume=path)
         st = run.status
         status = replace(st, detail=f"Newton, arc length on the load-line displacement: "
                                     f"{st.detail}")
@@ -843,13 +931,26 @@ def assess(
         anchor_length=0.0 if anchors is None else anchors.total_length,
         anchor_peaks=list(anchor_peaks.values()),
         ring_separation=[separation[r] for r in sorted(separation)])
-    result.elapsed = time.perf_counter() - t_start
+    result.elapsed = elapsed0 + time.perf_counter() - t_start
     if comm.rank == 0:
         log.info("%s: %s (%s)", case.name, result.status_line, status.detail)
     if write:
         write_run_folder(case, result, folder, model, inter, anchors, comm,
                          snapshots=snapshots, stress=state.get("stress"))
+        if ck is not None:
+            ck.remove()  # finished: nothing to resume
     return result
+
+
+def case_digest(case: ArchCase) -> str:
+    """SHA-256 of a case: of its file when it came from one, else of its parsed form
+    (a resume checks that the case did not change since the run began)."""
+    import hashlib
+
+    src = Path(case.source) if case.source else None
+    if src is not None and src.is_file():
+        return hashlib.sha256(src.read_bytes()).hexdigest()
+    return hashlib.sha256(repr(case).encode()).hexdigest()
 
 
 def anchor_state(anchors) -> list[dict]:

@@ -34,6 +34,7 @@ import logging
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from mpi4py import MPI
 
@@ -48,6 +49,15 @@ from masonry_fdem.solvers._setup import (
     owned_dofsets,
     stability_terms,
 )
+from masonry_fdem.solvers.restart import (
+    interactions_state,
+    model_state,
+    set_interactions_state,
+    set_model_state,
+)
+
+if TYPE_CHECKING:
+    from masonry_fdem.io.checkpoint import Checkpointer
 
 __all__ = ["ExplicitSolver", "EnergyAccount", "StableStep", "UnstableTimeStepError"]
 
@@ -364,6 +374,7 @@ class ExplicitSolver:
         every: int = 100,
         callback: Callable[[ExplicitSolver], None] | None = None,
         until: Callable[[ExplicitSolver], bool] | None = None,
+        checkpoint: Checkpointer | None = None,
     ) -> int:
         """Advance to time ``t_end`` [s] or by ``steps`` steps.
 
@@ -373,6 +384,14 @@ class ExplicitSolver:
         the same on every rank). A NaN or infinite state stops the run with
         FloatingPointError; the last good state (checked every ``every`` steps) is restored
         in the model.
+
+        ``checkpoint`` (a :class:`~masonry_fdem.io.checkpoint.Checkpointer`): every
+        ``every`` steps is a safe point where it writes the complete state when its own
+        count is due (``solver.n`` a multiple of ``checkpoint.every``) or a signal asked
+        to stop — then the run raises :class:`~masonry_fdem.io.checkpoint.Interrupted`.
+        A run resumed with :meth:`resume` from such a checkpoint (``every`` the same, the
+        checkpoint's step a multiple of it) and run to the same end gives the same state
+        bit for bit.
 
         Returns:
             The number of steps taken.
@@ -405,8 +424,57 @@ class ExplicitSolver:
                 if until is not None and until(self):
                     steps = k
                     break
+                if checkpoint is not None:
+                    checkpoint.safe_point(self.n, self.checkpoint_state)
         log.debug("explicit: %d steps in %.3f s", steps, time.perf_counter() - t0)
         return steps
+
+    # ------------------------------------------------------------------ checkpoints
+    def checkpoint_state(self) -> dict:
+        """This rank's complete state (copies): time [s], step count, every dof set's
+        arrays and energy account, the interactions' and the model's states."""
+        return {
+            "solver": "explicit", "t": self.t, "n": self.n, "dt": self.dt,
+            "kinetic0": self.kinetic0, "start": self._start, "work": self.work.copy(),
+            "sets": [{k: getattr(s, k).copy() for k in
+                      ("u", "v", "energy", "du", "reaction", "vp", "f_ext")}
+                     for s in self.sets],
+            "model": model_state(self.model),
+            "interactions": interactions_state(self.interactions),
+        }
+
+    def set_checkpoint_state(self, st: Mapping) -> None:
+        """Take a state of :meth:`checkpoint_state` (collective)."""
+        if st.get("solver") != "explicit":
+            raise ValueError(f"not an explicit solver's state ({st.get('solver')!r})")
+        if st["dt"] != self.dt:
+            raise ValueError(f"the state's time step {st['dt']:.6g} s is not this solver's "
+                             f"{self.dt:.6g} s")
+        if len(st["sets"]) != len(self.sets):
+            raise ValueError("the state has another set of dof sets")
+        set_model_state(self.model, st["model"])
+        set_interactions_state(self.interactions, st["interactions"])
+        for s, arrs in zip(self.sets, st["sets"], strict=True):
+            for k, a in arrs.items():
+                getattr(s, k)[...] = a
+        self.t, self.n = float(st["t"]), int(st["n"])
+        self.kinetic0 = st["kinetic0"]
+        self._start = st["start"]
+        self.work[...] = st["work"]
+
+    def resume(self, checkpoint: Checkpointer) -> int:
+        """Take the current checkpoint of ``checkpoint`` (collective; the solver built as
+        for the run that wrote it, on as many ranks).
+
+        Returns:
+            The step count reached (:attr:`n`).
+
+        Raises:
+            CheckpointError: none, corrupt, or written by another number of ranks.
+        """
+        _, st = checkpoint.read()
+        self.set_checkpoint_state(st)
+        return self.n
 
     def _finite(self) -> bool:
         ok = all(bool(np.isfinite(s.energy[K.E_KINETIC]) and np.isfinite(s.v).all())

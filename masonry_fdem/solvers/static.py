@@ -48,6 +48,12 @@ from petsc4py import PETSc
 
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State, Tangent
 from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescribe_displacements
+from masonry_fdem.solvers.restart import (
+    interactions_state,
+    model_state,
+    set_interactions_state,
+    set_model_state,
+)
 from masonry_fdem.solvers.status import RunStatus, Status
 
 __all__ = ["StaticSolver", "NewtonResult", "PathPoint", "StaticRun"]
@@ -501,6 +507,53 @@ class StaticSolver:
             for name, dofs in s.prescriptions.items():
                 out[name] = -s.f[dofs] - s.f_ext[dofs]
         return out
+
+    # ------------------------------------------------------------------ checkpoints
+    def checkpoint_state(self) -> dict:
+        """This rank's complete state (copies) at a committed state: every dof set's
+        current and committed dofs, the load factors, the tangent's sparsity pattern,
+        the increments' results, the model's and the interactions' states."""
+        return {
+            "solver": "static",
+            "sets": [{"u": s.u.copy(), "uc": s.uc.copy(), "v": s.v.copy()} for s in self.sets],
+            "load_factor": self.load_factor, "_load_factor": self._load_factor,
+            "dead_factor": self.dead_factor, "_ref": self._ref, "_moved": self._moved,
+            "_x_at_forces": self._x_at_forces.copy(), "_history": list(self._history),
+            "results": list(self.results), "f_ext": self.f_ext.copy(), "f_b": self.f_b.copy(),
+            "pattern": None if self._pattern is None else tuple(a.copy() for a in self._pattern),
+            "pattern_builds": self.pattern_builds,
+            "model": model_state(self.model),
+            "interactions": interactions_state(self.interactions),
+        }
+
+    def set_checkpoint_state(self, st: Mapping) -> None:
+        """Take a state of :meth:`checkpoint_state` (collective)."""
+        if st.get("solver") != "static":
+            raise ValueError(f"not a static solver's state ({st.get('solver')!r})")
+        if len(st["sets"]) != len(self.sets):
+            raise ValueError("the state has another set of dof sets")
+        set_model_state(self.model, st["model"])
+        set_interactions_state(self.interactions, st["interactions"])
+        for s, arrs in zip(self.sets, st["sets"], strict=True):
+            for k, a in arrs.items():
+                getattr(s, k)[...] = a
+        self.load_factor = st["load_factor"]
+        self._load_factor = st["_load_factor"]
+        self.dead_factor = st["dead_factor"]
+        self._ref, self._moved = st["_ref"], st["_moved"]
+        self._x_at_forces[...] = st["_x_at_forces"]
+        self._history = list(st["_history"])
+        self.results = list(st["results"])
+        self.f_ext[...] = st["f_ext"]
+        self.f_b[...] = st["f_b"]
+        self._make_snes()
+        pat = st["pattern"]
+        if pat is not None:
+            r, c = pat
+            self.J.setPreallocationCOO(r, c)
+            self.J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
+            self._pattern = (r.copy(), c.copy())
+        self.pattern_builds = st["pattern_builds"]
 
     # ------------------------------------------------------------------ load stepping
     def settle(self, steps: int = 8, *, min_fraction: float = 1.0 / 256.0, grow: float = 1.5,
@@ -1099,6 +1152,8 @@ class StaticSolver:
         dissipation: bool = True,
         max_stall_steps: int = 100,
         callback: Callable[[PathPoint], None] | None = None,
+        safe_point: Callable[[int, dict], None] | None = None,
+        resume: Mapping | None = None,
     ) -> StaticRun:
         """Trace the load–displacement path from the committed state up to and past the
         peak load.
@@ -1160,6 +1215,14 @@ class StaticSolver:
         (the run stops there: the structure carries it); *not converged* if an
         increment fails at the smallest size (or ``max_steps`` is reached) before the
         peak was passed.
+
+        Checkpoints: ``safe_point(steps, path_state)`` is called after every converged
+        increment that does not end the run, the solver committed there, with the
+        path's own state (a picklable dict: the run so far, the peak, the increment
+        size, the secant predictor, the snap-back and stall counters); a run resumed
+        with ``resume=path_state`` from the solver's state of that moment
+        (:meth:`set_checkpoint_state`), with the same arguments otherwise, goes on
+        exactly as the run would have.
 
         Returns:
             :class:`StaticRun` with ``loads`` and ``displacements`` (the measure) of
@@ -1227,14 +1290,15 @@ class StaticSolver:
             def load() -> float:
                 return sign * float(self.reactions()[prescription][component])
 
-        run = StaticRun(RunStatus(Status.NOT_CONVERGED, load(), load()))
-        lam0 = load()
-        d_start = measure()
-        run.loads.append(lam0)
-        run.displacements.append(0.0)
-        run.load_factors.append(self.load_factor)
-        run.iterations.append(0)
-        peak, k0, k_last = lam0, None, None
+        if resume is None:
+            run = StaticRun(RunStatus(Status.NOT_CONVERGED, load(), load()))
+            lam0 = load()
+            d_start = measure()
+            run.loads.append(lam0)
+            run.displacements.append(0.0)
+            run.load_factors.append(self.load_factor)
+            run.iterations.append(0)
+        peak, k0, k_last = lam0 if resume is None else 0.0, None, None
         switched = 0  # increments taken under dissipation control
         jumped = 0  # snap-backs passed at a fixed displacement measure (:meth:`_jump`)
         d_far, stall = 0.0, 0  # the farthest displacement; steps since it last grew
@@ -1248,6 +1312,17 @@ class StaticSolver:
         # (Δx, Δλ, its a·Δx), scaled to the next one (see _arc_increment)
         x_start = np.zeros(self.n_local)
         secant: tuple[np.ndarray, float, float] | None = None
+        if resume is not None:
+            if resume.get("control") != control:
+                raise ValueError(f"the path state is of {resume.get('control')!r} control, "
+                                 f"not {control!r}")
+            (run, lam0, d_start, peak, k0, k_last, switched, jumped, d_far, stall, fallen,
+             astray, diss, step, steps, secant) = (
+                resume[k] for k in ("run", "lam0", "d_start", "peak", "k0", "k_last",
+                                    "switched", "jumped", "d_far", "stall", "fallen",
+                                    "astray", "diss", "step", "steps", "secant"))
+            if control == "displacement":
+                d0 = resume["d0"]
         while steps < max_steps:
             d_now = run.displacements[-1]
             self._gather(x_start)
@@ -1416,6 +1491,13 @@ class StaticSolver:
                 break
             if res.iterations <= easy_iterations:
                 step = min(step * grow, dmax)
+            if safe_point is not None:
+                safe_point(steps, {
+                    "control": control, "run": run, "lam0": lam0, "d_start": d_start,
+                    "peak": peak, "k0": k0, "k_last": k_last, "switched": switched,
+                    "jumped": jumped, "d_far": d_far, "stall": stall, "fallen": fallen,
+                    "astray": astray, "diss": diss, "step": step, "steps": steps,
+                    "secant": secant, "d0": d0 if control == "displacement" else None})
         if status is None:
             lam = run.loads[-1]
             d = run.displacements[-1]

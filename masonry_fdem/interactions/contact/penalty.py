@@ -259,6 +259,9 @@ class BlockContact(Interaction):
         model = self.model
         comm = self.comm
         nloc = self.n_local_nodes
+        # (kept for a checkpoint: a resume builds the same tables again)
+        self._ext_args = (np.array(ghost_gid_sets, dtype=np.int64, copy=True),
+                          [np.array(x, dtype=np.int64, copy=True) for x in send_sets])
         ghost_gid = np.unique(np.asarray(ghost_gid_sets, dtype=np.int64))
         # phantom facets: the neighbours of ghost facets (needed by the corner rules)
         extra = np.setdiff1d(np.r_[self.g_prev[ghost_gid], self.g_next[ghost_gid]],
@@ -531,16 +534,27 @@ class BlockContact(Interaction):
                 if old.shape[0] == old_keys.size:
                     new[hit] = old[pos[hit]]
         order = np.argsort(keys, kind="stable")
-        self.pairs = np.ascontiguousarray(pairs[order])
-        self.keys = keys[order]
-        self.counted = np.ascontiguousarray(counted[order], dtype=float)
+        self._install(pairs[order], keys[order], counted[order], hist[0][order],
+                      hist[1][order])
+        self.travel = 0.0
+        self.since = 0
+        self.rebuilds += 1
+        self._u_rebuild[:] = self.model.u.x.array[: self._u_rebuild.size]
+
+    def _install(self, pairs, keys, counted, tau, tau_c) -> None:
+        """Take the candidate pairs (sorted by key), which of them this rank counts, their
+        history, and the arrays that follow from them."""
+        self.pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
+        self.keys = np.asarray(keys, dtype=np.int64)
+        self.counted = np.ascontiguousarray(counted, dtype=float)
         # the pairs' forces on their nodes, and the lists that sum them into this rank's
         self.fp = np.zeros((self.pairs.shape[0], 8))
         self.fdp = np.zeros((self.pairs.shape[0], 8))
         self._gptr, self._gidx = node_lists(
             np.c_[self.facets[self.pairs[:, 0]], self.facets[self.pairs[:, 1]]],
             self.n_local_nodes)
-        self.tau, self.tau_c = (np.ascontiguousarray(h[order]) for h in hist)
+        self.tau, self.tau_c = (np.ascontiguousarray(h, dtype=float).reshape(-1, 2)
+                                for h in (tau, tau_c))
         ma = self.facet_material[self.pairs[:, 0]]
         mb = self.facet_material[self.pairs[:, 1]]
         self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
@@ -566,10 +580,6 @@ class BlockContact(Interaction):
         tb = self.block_thickness[self.facet_block[self.pairs[:, 1]]]
         self.depth = self.settings.depth_factor * np.minimum(np.minimum(la, lb),
                                                              np.minimum(ta, tb))
-        self.travel = 0.0
-        self.since = 0
-        self.rebuilds += 1
-        self._u_rebuild[:] = self.model.u.x.array[: self._u_rebuild.size]
 
     def update(self, state: State) -> None:
         """Rebuild when due, or when the relative travel could exceed the margin (the
@@ -700,6 +710,57 @@ class BlockContact(Interaction):
         self._committed = (self.keys.copy(), self.tau_c.copy())
         self._fd_live = False
         self.rebuild(np.zeros_like(self.model.v))
+
+    #: what :meth:`checkpoint_state` keeps beyond :meth:`state`
+    _checkpoint_extra = ("travel", "since", "_u_rebuild", "_fd", "_u1", "_u2", "_fd_live",
+                         "_work", "_acc", "cdamp", "fp", "fdp", "inv_mass", "inv_inertia")
+
+    def checkpoint_state(self) -> dict:
+        """:meth:`state` and what a resumed run needs to go on exactly as the run would
+        have: the candidate pairs and the ghost facets they were found among (no rebuild
+        on resume), the rebuild counters (travel [m], steps since the last rebuild, the
+        displacement [m] there), the committed history by key and the dampers' work
+        terms."""
+        st = self.state()
+        st["__ext_args"] = self._ext_args
+        st["__pairs"] = self.pairs.copy()
+        st["__counted"] = self.counted.copy()
+        st["__committed"] = (None if self._committed is None
+                             else tuple(a.copy() for a in self._committed))
+        for k in self._checkpoint_extra:
+            v = getattr(self, k)
+            st["__" + k] = v.copy() if isinstance(v, np.ndarray) else v
+        return st
+
+    def set_checkpoint_state(self, st) -> None:
+        """Take a state of :meth:`checkpoint_state` (collective in parallel: the ghost
+        exchange is set up again)."""
+        st = dict(st)
+        ghost, send = st.pop("__ext_args")
+        pairs = st.pop("__pairs")
+        counted = st.pop("__counted")
+        committed = st.pop("__committed")
+        extra = {k: st.pop("__" + k) for k in self._checkpoint_extra}
+        for k in self.state_attributes:
+            if k not in st:
+                raise KeyError(f"{type(self).__name__}: state lacks {k!r}")
+        self.excluded = np.array(st["excluded"], dtype=np.int64)
+        self.bonded_block = np.array(st["bonded_block"], dtype=bool)
+        self.energy[...] = st["energy"]
+        self.dissipated = float(st["dissipated"])
+        self.damped = float(st["damped"])
+        self.rebuilds = int(st["rebuilds"])
+        self._build_extended(ghost, send)
+        self._install(pairs, st["keys"], counted, st["tau"], st["tau_c"])
+        self._committed = None if committed is None else tuple(a.copy() for a in committed)
+        for k, v in extra.items():
+            cur = getattr(self, k)
+            if isinstance(cur, np.ndarray) and isinstance(v, np.ndarray) \
+                    and cur.shape == v.shape:
+                cur[...] = v
+            else:
+                setattr(self, k, v.copy() if isinstance(v, np.ndarray) else v)
+        self._sync(self.model.v)
 
     def exclude(self, keys: np.ndarray, bonded_block: np.ndarray) -> None:
         """Leave out the facet pairs ``keys`` (min·n + max of global facet ids: bonded

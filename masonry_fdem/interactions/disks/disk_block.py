@@ -236,6 +236,17 @@ class DiskBlockContact(Interaction):
         return (np.ascontiguousarray(self.pairs[touch, 0]), f,
                 np.ascontiguousarray(o[:, [DF.O_XC, DF.O_YC]]))
 
+    def checkpoint_state(self) -> dict:
+        """:meth:`state` and whether the first search for pairs is still to come."""
+        return {**self.state(), "__fresh": bool(self._fresh)}
+
+    def set_checkpoint_state(self, st) -> None:
+        """Take a state of :meth:`checkpoint_state`."""
+        st = dict(st)
+        fresh = st.pop("__fresh")
+        self.set_state(st)
+        self._fresh = fresh
+
     def energies(self) -> dict[str, float]:
         """Elastic energy in the disk–block contacts now and dissipated by friction and
         damping since the start [J] (collective)."""

@@ -373,6 +373,18 @@ class Disks(Interaction):
         self._fixed_xy[:] = np.repeat(self.fixed, 2)
         self._x_ref[:] = self.x
 
+    def checkpoint_state(self) -> dict:
+        """:meth:`state` and the centres [m] at the last search for pairs (a resumed run
+        searches again at the same steps as the run would have)."""
+        return {**self.state(), "__x_ref": self._x_ref.copy()}
+
+    def set_checkpoint_state(self, st) -> None:
+        """Take a state of :meth:`checkpoint_state`."""
+        st = dict(st)
+        x_ref = st.pop("__x_ref")
+        self.set_state(st)
+        self._x_ref[:] = x_ref
+
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> None:
         """Write the disks (geometry, materials, state) to an ``.npz`` file (rank 0)."""
