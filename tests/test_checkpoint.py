@@ -184,6 +184,68 @@ def test_killed_while_writing_keeps_the_previous_checkpoint(tmp_path, monkeypatc
         assert np.array_equal(a, b)
 
 
+_KILLED_CHILD = """
+import sys, time
+from pathlib import Path
+sys.path.insert(0, {tests!r})
+from mpi4py import MPI
+from masonry_fdem.io import checkpoint as ckpt
+from masonry_fdem.io.checkpoint import Checkpointer
+from test_checkpoint import explicit_run
+real = ckpt._write_atomic
+calls = {{"n": 0}}
+def slow(path, data):
+    if path.name == "rank0.pkl":
+        calls["n"] += 1
+        if calls["n"] == 2:  # the second generation: half written, then stuck
+            with open(path.with_name(path.name + ".tmp"), "wb") as fh:
+                fh.write(data[: len(data) // 2])
+                fh.flush()
+            Path({marker!r}).write_text("half")
+            time.sleep(120)
+    real(path, data)
+ckpt._write_atomic = slow
+run = explicit_run(MPI.COMM_SELF)
+run.run(steps=300, every=50, checkpoint=Checkpointer(Path({folder!r}), MPI.COMM_SELF,
+                                                    kind="explicit", every=100))
+"""
+
+
+def test_process_killed_while_writing_keeps_the_previous_checkpoint(tmp_path):
+    """A real kill: a process writing its second checkpoint is killed (SIGKILL) half way
+    through its rank file; the first checkpoint stays current, and a resume from it ends
+    as the uninterrupted run, bit for bit."""
+    comm = MPI.COMM_WORLD
+    if comm.size > 1:
+        pytest.skip("starts its own process (run the serial suite)")
+    folder, marker = tmp_path / "run", tmp_path / "half_written"
+    code = _KILLED_CHILD.format(tests=str(ROOT / "tests"), marker=str(marker),
+                                folder=str(folder))
+    env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, cwd=ROOT,
+                            stderr=subprocess.PIPE)
+    try:
+        t0 = time.monotonic()
+        while not marker.exists():
+            assert proc.poll() is None, proc.stderr.read().decode()
+            assert time.monotonic() - t0 < 240, "the child never reached its second write"
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGKILL)
+        assert proc.wait(timeout=30) == -signal.SIGKILL
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert list(folder.glob("checkpoint/*/rank0.pkl.tmp"))  # the torn write is there
+    assert ckpt.read_manifest(folder)["step"] == 100
+    ref = explicit_run(comm)
+    ref.run(steps=300, every=50)
+    again = explicit_run(comm)
+    assert again.resume(Checkpointer(folder, comm, kind="explicit")) == 100
+    again.run(steps=200, every=50)
+    for a, b in zip(state_of(ref), state_of(again), strict=True):
+        assert np.array_equal(a, b)
+
+
 def test_checkpoint_errors(tmp_path):
     """Clear errors: no checkpoint, another number of ranks, a corrupt rank file."""
     comm = MPI.COMM_WORLD

@@ -81,7 +81,8 @@ def test_topple_wall_demo_small(shared_tmp, monkeypatch, capsys):
     out = shared_tmp / "topple"
     monkeypatch.setattr(sys, "argv", ["topple_wall.py", "--courses", "3", "--bricks", "2",
                                       "--time", "0.03", "--out", str(out)])
-    runpy.run_path(str(ROOT / "demos" / "topple_wall.py"), run_name="__main__")
+    demo = runpy.run_path(str(ROOT / "demos" / "topple_wall.py"), run_name="__main__")
+    n_points, n_cells = demo["blocks"].n_nodes, demo["blocks"].n_cells
     text = capsys.readouterr().out
     if comm.rank == 0:
         # the energy account closes: residual below 1 % of the work done (initial kinetic
@@ -95,6 +96,23 @@ def test_topple_wall_demo_small(shared_tmp, monkeypatch, capsys):
         for term in ("contact friction", "contact damper", "solver damping"):
             assert term in account
         assert (out / "toppled.png").exists() and (out / "history.csv").exists()
+        # the demo's ParaView series (.pvd of .vtu, beside the .bp) read back by meshio:
+        # every record with the model's points and cells
+        import xml.etree.ElementTree as ET
+
+        import meshio
+
+        files = [d.get("file") for d in ET.parse(out / "model.pvd").getroot().iter("DataSet")]
+        history = list(csv.DictReader(open(out / "history.csv")))
+        assert len(files) == len(history) > 1
+        for f in (files[0], files[-1]):
+            mesh = meshio.read(out / f)
+            print(f"  {f}: {mesh.points.shape[0]} points, "
+                  f"{sum(len(c.data) for c in mesh.cells)} cells; the model {n_points}, "
+                  f"{n_cells}")
+            assert mesh.points.shape[0] == n_points
+            assert sum(len(c.data) for c in mesh.cells) == n_cells
+            assert mesh.point_data["displacement"].shape[0] == n_points
 
 
 def test_topple_wall_demo_same_history_on_one_and_two_ranks(shared_tmp, monkeypatch):
