@@ -23,8 +23,10 @@ A fully softened joint is Coulomb friction without tension, i.e. frictional cont
 the joint's stiffness. A segment whose points have all softened (to ``release_ratio`` of
 their strength) and opened is handed over to the block contact, so no force jumps; so is one that
 has slid by more than half its length (there the two contacts agree when the contact
-penalty equals the joint's k_n). While a segment is bonded, the block contact ignores its
-facet pair.
+penalty equals the joint's k_n), and one whose two facets have turned against each other
+by more than ``release_turn`` (a piece swung open about one closed end). While a segment
+is bonded, the block contact ignores its facet pair, and the pairs of two blocks held all
+round by bonded segments (no free facet).
 
 Parallel: every rank knows every segment; a segment is evaluated by every rank holding one
 of its two blocks (the nodes of the other side exchanged every step), and each rank sums
@@ -231,6 +233,11 @@ class Joints(Interaction):
         check_every: commits between hand-over checks (collective).
         release_ratio: an open joint goes to the contact once its strength has softened
             to this fraction (the force then jumps by at most this fraction of the peak).
+        release_turn: a joint whose two facets have turned against each other by more
+            than this angle [rad] goes to the contact too: it can only have turned that
+            far by breaking (a hinge that opened about one closed end), and a
+            zero-thickness interface in the turning frame of the two facets means nothing
+            once they are far from parallel (at 180° the frame flips).
 
     Raises:
         ValueError: two blocks touch along a facet and no joint material is given for them.
@@ -253,14 +260,18 @@ class Joints(Interaction):
         tolerance: float | None = None,
         check_every: int = 10,
         release_ratio: float = 1e-4,
+        release_turn: float = math.radians(30.0),
     ):
         self.model = model
         self.comm = comm = model.comm
         self.contact = contact
         self.check_every = int(check_every)
         self.release_ratio = float(release_ratio)
+        self.release_cos = math.cos(float(release_turn))
         if self.check_every < 1 or not 0 < self.release_ratio < 1:
             raise ValueError("check_every must be >= 1 and release_ratio in (0, 1)")
+        if not 0 < release_turn <= math.pi:
+            raise ValueError(f"release_turn must be in (0, pi] rad, got {release_turn}")
         blocks = model.blocks
         names = blocks.material_names
         table: dict[tuple[str, str], JointMaterial | None] = {}
@@ -392,6 +403,11 @@ class Joints(Interaction):
         self.n_commits = 0
         self.released = np.zeros(nseg, dtype=bool)
         self.seg_blocks = np.c_[fblock[fa], fblock[fb]]
+        # for "held all round": each block's boundary facets, their lengths and the
+        # segments on them (a block with a free facet can touch another block there)
+        self._n_facets = gf.shape[0]
+        self._facet_length = flen
+        self._facet_block = fblock
         self._tell_contact()
         # facet -> cell, for the state field
         self._facet_cell = _facet_cells(blocks, gf)
@@ -545,9 +561,19 @@ class Joints(Interaction):
         spent = np.minimum(e1, e2) <= self.release_ratio
         done_ip = (((s[:, JK.S_STATUS] == JK.OPEN) & spent)
                    | (np.abs(s[:, JK.S_DS]) > 0.5 * self.seg_length[seg_local]))
-        # a segment goes when both its points are done
+        # a segment goes when both its points are done, or when its facets have turned
+        # against each other by more than release_turn (B's facet reversed: parallel
+        # when bonded)
+        x = self.X + self.u.reshape(-1, 2)
+        da = x[self.ipa[:, 1]] - x[self.ipa[:, 0]]
+        db = x[self.ipb[:, 0]] - x[self.ipb[:, 1]]
+        cos = np.einsum("ij,ij->i", da, db) / (np.linalg.norm(da, axis=1)
+                                                * np.linalg.norm(db, axis=1))
+        turned = np.bincount(seg_local, weights=(cos < self.release_cos).astype(float),
+                             minlength=self.n_segments) > 0
         cnt = np.bincount(seg_local, weights=done_ip.astype(float), minlength=self.n_segments)
-        new = np.flatnonzero((cnt == 2) & ~self.released & (self.seg_rank == self.comm.rank))
+        new = np.flatnonzero(((cnt == 2) | turned) & ~self.released
+                             & (self.seg_rank == self.comm.rank))
         allnew = np.concatenate(self.comm.allgather(new)).astype(np.int64)
         if allnew.size == 0:
             return
@@ -560,10 +586,20 @@ class Joints(Interaction):
         c = self.contact
         if c is None:
             return
-        bonded = np.zeros(self.model.blocks.n_blocks, dtype=bool)
+        nb = self.model.blocks.n_blocks
+        bonded = np.zeros(nb, dtype=bool)
         bonded[self.seg_blocks.ravel()] = True
         bonded[self.seg_blocks[self.released].ravel()] = False
         bonded[self.dry_blocks] = False
+        # held all round: every boundary facet of the block covered by intact segments
+        # (a block with a free face — an outer face, the face of a notch — can meet
+        # another block there, intact joints or not)
+        live = ~self.released
+        covered = np.zeros(self._n_facets)
+        for side in (0, 1):
+            np.add.at(covered, self.seg_facets[live, side], self.seg_length[live])
+        free = covered < (1.0 - 1e-6) * self._facet_length
+        bonded[np.unique(self._facet_block[free])] = False
         c.exclude(self.seg_key[~self.released], bonded)
 
     def set_friction(self, material: JointMaterial, tan_phi: float) -> int:
