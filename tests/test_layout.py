@@ -20,12 +20,13 @@ ROOT = Path(masonry_fdem.__file__).parent
 #: the layers, lowest first; a module belongs to the longest prefix that names it
 #: ("" is the package's own __init__, the top: it re-exports the public API)
 LAYERS = (
-    ("_compat", "constants", "checks"),
+    # (io.checkpoint: files and signals only, below the solvers that write checkpoints)
+    ("_compat", "constants", "checks", "io.checkpoint"),
     ("geometry",),
     ("parallel",),
     ("materials",),
     ("model",),
-    ("interactions.protocol", "interactions.search"),
+    ("interactions.protocol", "interactions.search", "interactions._sums"),
     ("interactions.contact",),
     ("interactions.joints",),
     ("interactions.disks",),
