@@ -214,7 +214,7 @@ def _column(comm, t_end):
     coupling = DiskBlockContact(disks, model, damping_ratio=0.2)
     s = ExplicitSolver(model, interactions=[disks, coupling], damping=5.0)
     s.run(t_end=t_end, every=1000)
-    return disks.x.copy(), model.displacement(), s.reactions()["base"]
+    return disks.by_id(disks.x), model.displacement(), s.reactions()["base"]
 
 
 def test_disks_on_deformable_blocks_same_on_any_number_of_ranks():

@@ -79,6 +79,22 @@ class DofSet:
         prescriptions: named groups of prescribed dofs ``{name: (dof_x, dof_y)}``
             (for ``DynamicRelaxation.solve(displacement=...)`` and ``reactions()``).
         replicated: every rank holds the whole set (its sums are not reduced over ranks).
+        order: (n,) int64, the original number of the dof stored at each position (the
+            identity until the owner permutes the set).
+        generation: how many times the owner has permuted the set.
+
+    Permutation. An owner may reorder the storage of its set in place (the disks sort
+    themselves in space at neighbour-list rebuilds, so that throughput does not depend on
+    the order the user made them in): it calls :meth:`permute`, which moves every array
+    of the set (u, v, mass, f, f_ext, presc, vp, reaction, and the dofs named in
+    ``prescriptions``) and records the new ``order``. A solver keeping per-dof arrays of
+    its own (inverse masses, fictitious velocities, snapshots) compares ``generation``
+    with the one it last saw after every ``update()`` (and at the start of a step) and
+    moves its arrays the same way (:class:`masonry_fdem.solvers._setup.Ordering`). The
+    event is carried by the set, not by an extra protocol call, because the permutation
+    is decided inside ``update()`` (at a rebuild) and every solver already calls that;
+    ``order`` rather than the last permutation alone is recorded, so a follower that
+    missed several events (a restored state) still finds its way with one gather.
     """
 
     name: str
@@ -92,6 +108,8 @@ class DofSet:
     reaction: np.ndarray | None = None
     prescriptions: Mapping[str, np.ndarray] = field(default_factory=dict)
     replicated: bool = True
+    order: np.ndarray | None = None
+    generation: int = 0
 
     def __post_init__(self) -> None:
         n = self.u.size
@@ -107,6 +125,30 @@ class DofSet:
             self.vp = np.zeros(n)
         if self.reaction is None:
             self.reaction = np.zeros(n)
+        if self.order is None:
+            self.order = np.arange(n, dtype=np.int64)
+
+    def permute(self, perm: np.ndarray) -> None:
+        """Reorder the set in place: the dof now stored at position k is the one stored
+        at ``perm[k]`` before (every array of the set, the ``prescriptions`` renumbered;
+        the owner's own arrays, of which these are views, move with them)."""
+        perm = np.asarray(perm, dtype=np.int64)
+        n = self.u.size
+        if perm.shape != (n,):
+            raise ValueError(f"dof set {self.name!r}: a permutation of {n} dofs expected, "
+                             f"got shape {perm.shape}")
+        seen = set()
+        for key in ("u", "v", "mass", "f", "f_ext", "presc", "vp", "reaction", "order"):
+            a = getattr(self, key)
+            if id(a) not in seen:  # an array given twice moves once
+                seen.add(id(a))
+                a[...] = a[perm]
+        if self.prescriptions:
+            new_of_old = np.empty(n, dtype=np.int64)
+            new_of_old[perm] = np.arange(n)
+            for dofs in self.prescriptions.values():
+                dofs[...] = new_of_old[dofs]
+        self.generation += 1
 
 
 class State:

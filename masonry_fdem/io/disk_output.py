@@ -2,7 +2,9 @@
 
 Each call of :meth:`DiskOutput.write` writes ``disks_<k>.vtp`` (points at the disk centres
 with point data radius [m], velocity [m/s], angular velocity [rad/s], rotation [rad] and
-the contact force on the disk [N]) and rewrites ``disks.pvd``, the collection ParaView
+the contact force on the disk [N]; point k is disk k of the user's numbering, the order
+the disks were given in, in every file — whatever order the set stores them in — and the
+point data ``id`` says so) and rewrites ``disks.pvd``, the collection ParaView
 opens as one time series. Draw the disks with the "Glyph" filter (sphere or 2D glyph,
 scale array "radius", scale factor 2). Written by rank 0 (every rank holds every disk).
 """
@@ -40,9 +42,10 @@ class DiskOutput:
         if d.comm.rank != 0:
             return
         name = f"disks_{len(self.steps):05d}.vtp"
-        pts = np.c_[d.x, np.zeros(d.n)]
-        vel = np.c_[d.v, np.zeros(d.n)]
-        fc = np.c_[d.f, np.zeros(d.n)]  # contact (and coupling) forces at the step
+        b = d.by_id  # storage order -> the user's numbering
+        pts = np.c_[b(d.x), np.zeros(d.n)]
+        vel = np.c_[b(d.v), np.zeros(d.n)]
+        fc = np.c_[b(d.f), np.zeros(d.n)]  # contact (and coupling) forces at the step
         offsets = np.arange(1, d.n + 1, dtype="<i8")
         conn = np.arange(d.n, dtype="<i8")
 
@@ -55,9 +58,10 @@ class DiskOutput:
             f"<Points>{_array('Points', pts, 3)}</Points>\n"
             f"<Verts>{int_array('connectivity', conn)}{int_array('offsets', offsets)}</Verts>\n"
             '<PointData Scalars="radius" Vectors="velocity">\n'
-            f"{_array('radius', d.r, 1)}\n{_array('velocity', vel, 3)}\n"
-            f"{_array('angular_velocity', d.omega, 1)}\n{_array('rotation', d.theta, 1)}\n"
-            f"{_array('contact_force', fc, 3)}\n"
+            f"{_array('radius', b(d.r), 1)}\n{_array('velocity', vel, 3)}\n"
+            f"{_array('angular_velocity', b(d.omega), 1)}\n"
+            f"{_array('rotation', b(d.theta), 1)}\n"
+            f"{_array('contact_force', fc, 3)}\n{int_array('id', conn)}\n"
             "</PointData>\n</Piece>\n</PolyData>\n</VTKFile>\n"
         )
         (self.folder / name).write_text(xml)

@@ -9,8 +9,8 @@ import numpy as np
 
 from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction
 
-__all__ = ["as_interactions", "damped_step", "owned_dofsets", "prescribe_displacements",
-           "stability_terms"]
+__all__ = ["Ordering", "as_interactions", "damped_step", "owned_dofsets",
+           "prescribe_displacements", "stability_terms"]
 
 
 def as_interactions(interactions: Interaction | Iterable[Interaction] | None
@@ -96,3 +96,39 @@ def prescribe_displacements(model, sets, displacement: Mapping[str, Sequence[flo
         for comp in (0, 1):
             if val[comp] is not None:
                 u[p.dofs[p.components == comp]] = float(val[comp])
+
+
+class Ordering:
+    """Follows the storage order of a dof set whose owner may permute it
+    (:meth:`~masonry_fdem.interactions.protocol.DofSet.permute`): a solver's per-dof
+    arrays of its own (not views of the set) are moved the same way by :meth:`follow`.
+
+    Args:
+        ds: the dof set (None: a set nobody permutes, e.g. the block nodes).
+    """
+
+    __slots__ = ("ds", "generation", "order")
+
+    def __init__(self, ds: DofSet | None):
+        self.ds = ds
+        self.generation = ds.generation if ds is not None else 0
+        self.order = ds.order.copy() if ds is not None else None
+
+    def follow(self, arrays: Iterable[np.ndarray]) -> bool:
+        """If the set was permuted since the last call, reorder ``arrays`` (per-dof, in
+        the order last seen) in place to the set's order now; True if it was."""
+        ds = self.ds
+        if ds is None or ds.generation == self.generation:
+            return False
+        n = self.order.size
+        old_pos = np.empty(n, dtype=np.int64)
+        old_pos[self.order] = np.arange(n)
+        perm = old_pos[ds.order]  # new position k holds what was at perm[k]
+        done = set()
+        for a in arrays:
+            if a is not None and id(a) not in done:
+                done.add(id(a))
+                a[...] = a[perm]
+        self.order[:] = ds.order
+        self.generation = ds.generation
+        return True

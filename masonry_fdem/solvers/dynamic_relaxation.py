@@ -51,7 +51,12 @@ import numpy as np
 
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
-from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescribe_displacements
+from masonry_fdem.solvers._setup import (
+    Ordering,
+    as_interactions,
+    owned_dofsets,
+    prescribe_displacements,
+)
 from masonry_fdem.solvers.status import RunStatus, Status
 
 __all__ = ["CollapseResult", "DynamicRelaxation", "DRResult"]
@@ -117,9 +122,12 @@ class CollapseResult:
 class _Set:
     """Dynamic relaxation's arrays of one dof set: the unknowns ``u`` (the owner's), the
     fictitious velocity and masses, the force accumulator ``f`` handed to the
-    interactions and the resisting force ``res`` (internal minus interaction forces)."""
+    interactions and the resisting force ``res`` (internal minus interaction forces).
+    Those of its own follow the set's storage order when its owner permutes it
+    (``ordering``)."""
 
-    def __init__(self, name, u, f, f_ext, mfict, presc, replicated, prescriptions, res):
+    def __init__(self, name, u, f, f_ext, mfict, presc, replicated, prescriptions, res,
+                 ds=None):
         self.name, self.u, self.f, self.f_ext = name, u, f, f_ext
         self.m, self.presc, self.replicated = mfict, presc, replicated
         self.prescriptions = prescriptions
@@ -128,6 +136,11 @@ class _Set:
         self.u0 = np.zeros_like(u)
         self.res0 = np.zeros_like(u)
         self.sums = np.zeros(4)
+        self.ordering = Ordering(ds)
+
+    def follow_order(self) -> None:
+        """Move the arrays of its own if the owner permuted the set since last seen."""
+        self.ordering.follow((self.m, self.v, self.u0, self.res0, self.res))
 
 
 class DynamicRelaxation:
@@ -193,7 +206,7 @@ class DynamicRelaxation:
                       False, {}, self.f_net)
         self.sets = [blocks] + [
             _Set(n, ds.u, ds.f, ds.f_ext, scale * rows[n], ds.presc, ds.replicated,
-                 ds.prescriptions, np.zeros_like(ds.u)) for n, ds in owned.items()]
+                 ds.prescriptions, np.zeros_like(ds.u), ds) for n, ds in owned.items()]
         self.v = blocks.v
         self._fprev = np.zeros_like(model.f_int)
         self._sums = np.zeros(6)  # the blocks' measures, then the velocity quotient's parts
@@ -227,6 +240,8 @@ class DynamicRelaxation:
             self.prescribe(displacement)
         m.external_force(load_factor, out=self.f_ext)
         blocks, others = self.sets[0], self.sets[1:]
+        for s in others:
+            s.follow_order()
         free = self.presc == 0
         ref2 = comm.allreduce(float(np.dot(self.f_ext[free], self.f_ext[free])))
         for s in others:  # replicated: counted once
@@ -319,6 +334,8 @@ class DynamicRelaxation:
             s.f.fill(0.0)
         for c in self.interactions:
             c.update(self._state)
+            for s in self.sets[1:]:
+                s.follow_order()
             c.add_forces(self._state)
         np.negative(self.f_net, out=self.f_net)
         for s in self.sets[1:]:

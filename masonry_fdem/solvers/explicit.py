@@ -44,6 +44,7 @@ from masonry_fdem.constants import DT_SAFETY
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.solvers import _kernels as K
 from masonry_fdem.solvers._setup import (
+    Ordering,
     as_interactions,
     damped_step,
     owned_dofsets,
@@ -189,10 +190,12 @@ class StableStep:
 
 
 class _Set:
-    """The explicit solver's arrays of one dof set (views of the owner's state)."""
+    """The explicit solver's arrays of one dof set (views of the owner's state), and
+    those of its own, which follow the set's storage order when its owner permutes it
+    (``ordering``, see :meth:`~masonry_fdem.interactions.protocol.DofSet.permute`)."""
 
     def __init__(self, name, u, v, f_int, f_ext, f_con, mass, presc, vp, reaction,
-                 replicated, prescriptions):
+                 replicated, prescriptions, ds=None):
         self.name = name
         self.u, self.v, self.f_int, self.f_ext, self.f_con = u, v, f_int, f_ext, f_con
         self.mass = mass
@@ -203,6 +206,10 @@ class _Set:
         self.energy = np.zeros(K.N_ENERGY)
         self.du = np.zeros_like(u)
         self.local = 0.0  # Cundall's local damping coefficient α
+        self.good_u = u.copy()  # the last finite state (ExplicitSolver.run)
+        self.good_v = v.copy()
+        self.ordering = Ordering(ds)
+        self.own = [self.minv, self.f_int, self.du, self.good_u, self.good_v]
 
 
 class ExplicitSolver:
@@ -299,7 +306,7 @@ class ExplicitSolver:
         for ds in owned.values():
             self.sets.append(_Set(ds.name, ds.u, ds.v, np.zeros_like(ds.u), ds.f_ext, ds.f,
                                   ds.mass, ds.presc, ds.vp, ds.reaction, ds.replicated,
-                                  ds.prescriptions))
+                                  ds.prescriptions, ds))
         for s in self.sets:
             s.local = alpha.get(s.name, 0.0)
         self.kinetic0 = sum(self._kinetic(s) for s in self.sets)
@@ -315,6 +322,10 @@ class ExplicitSolver:
                         for _ in self.interactions]
         # work of each interaction's forces on the distributed and on the replicated sets
         self.work = np.zeros((2, len(self.interactions)))
+        # owned sets whose owner may permute them, with the per-dof arrays to move along
+        self._ordered = [(s, s.own + [st.f[s.name] for st in self._states
+                                      if st.f[s.name] is not s.f_con])
+                         for s in self.sets[1:]]
         if model.comm.rank == 0:
             log.info(
                 "explicit: dt = %.4g s (critical %.4g s, safety %.3g)",
@@ -331,9 +342,16 @@ class ExplicitSolver:
         lf = self.load_factor
         return float(lf(t)) if callable(lf) else float(lf)
 
+    def _follow_orders(self) -> None:
+        """Move the solver's own per-dof arrays after an owner permuted its dof set (the
+        disks sorting themselves at a rebuild; checked after every ``update``)."""
+        for s, arrays in self._ordered:
+            s.ordering.follow(arrays)
+
     def step(self) -> None:
         """Advance one time step (collective)."""
         m = self.model
+        self._follow_orders()
         t_half = self.t + 0.5 * self.dt
         for p in self._timed:
             self.vp[p.dofs] = p.value(t_half)
@@ -348,6 +366,7 @@ class ExplicitSolver:
                 for s in self.sets:
                     st.f[s.name].fill(0.0)
             c.update(st)
+            self._follow_orders()
             c.add_forces(st)
             if self._own:
                 for s in self.sets:
@@ -400,24 +419,26 @@ class ExplicitSolver:
             raise ValueError("give exactly one of t_end or steps")
         if steps is None:
             steps = max(0, int(np.ceil((t_end - self.t) / self.dt - 1e-9)))
-        good = [(s.u.copy(), s.v.copy()) for s in self.sets]
+        for s in self.sets:
+            s.good_u[:] = s.u
+            s.good_v[:] = s.v
         good_t = self.t
         t0 = time.perf_counter()
         for k in range(1, steps + 1):
             self.step()
             if k % every == 0 or k == steps:
                 if not self._finite():
-                    for s, (gu, gv) in zip(self.sets, good, strict=True):
-                        s.u[:] = gu
-                        s.v[:] = gv
+                    for s in self.sets:
+                        s.u[:] = s.good_u
+                        s.v[:] = s.good_v
                     bad_t, self.t = self.t, good_t
                     raise FloatingPointError(
                         f"non-finite displacement or velocity at t = {bad_t:.6g} s "
                         f"(step {self.n}); the state at t = {good_t:.6g} s is kept"
                     )
-                for s, (gu, gv) in zip(self.sets, good, strict=True):
-                    gu[:] = s.u
-                    gv[:] = s.v
+                for s in self.sets:
+                    s.good_u[:] = s.u
+                    s.good_v[:] = s.v
                 good_t = self.t
                 if callback is not None:
                     callback(self)

@@ -30,6 +30,11 @@ def precompile() -> None:
     _kernels.love_sum_points(d.x, np.zeros(1, dtype=np.int64), np.zeros((1, 2)),
                              np.zeros((1, 2)), -1.0, -1.0, 1.0, 1.0, np.zeros((2, 2)))
     _kernels.brute_force_disk_pairs(d.x, d.r, 0.1)
+    perm, _ = _kernels.cell_order(d.x, d.r, 0.1, d.ids)
+    crowd = np.r_[np.linspace(0.0, 1.0, 80)[:, None] * [1.0, 0.5], [[1e3, 1e3]]]
+    _kernels.cell_order(crowd, np.ones(81), 0.1, np.arange(81))  # a crowded cell
+    _kernels.carry_history_renumbered(d.pairs, d.hist, perm[::-1].copy(), d.pairs,
+                                      d.hist.copy())
     _kernels.hertz_force(1.0, 0.5, 0.1, 0.2)
     _kernels.max_node_move(np.zeros(8), np.zeros(8), np.arange(4, dtype=np.int64))
     _facet_kernels.precompile()

@@ -62,10 +62,11 @@ exactly and a rigidly rotating pair has no tangential slip.
 Use. Every k steps the caller rebuilds the candidate pairs with
 :func:`disk_pairs_cell_list` and a margin the disks cannot close in k steps (≥ 2 v_max k dt),
 then moves the history of the pairs that persist with :func:`carry_history` (both lists
-sorted, persistent disk ids); every step it calls :func:`disk_disk_forces` on the current
-list. The time step must satisfy dt < 2/ω with ω² from :func:`pair_omega2` on the
-unloading stiffness :func:`hertz_stiffness_bound` at the largest expected overlap, times
-the largest number of contacts of a disk.
+sorted, persistent disk ids), or, when it has just reordered the disks in space
+(:func:`cell_order`), with :func:`carry_history_renumbered`; every step it calls
+:func:`disk_disk_forces` on the current list. The time step must satisfy dt < 2/ω with
+ω² from :func:`pair_omega2` on the unloading stiffness :func:`hertz_stiffness_bound` at
+the largest expected overlap, times the largest number of contacts of a disk.
 
 Arrays (SI): x (n, 2) centres [m]; v (n, 2) velocities at the half step [m/s]; omega (n,)
 angular velocities [rad/s]; r (n,) radii [m]; mat (n,) int64 material ids; pairs (k, 2)
@@ -398,23 +399,11 @@ def brute_force_disk_pairs(x, r, margin):
 
 
 @njit(cache=True)
-def disk_pairs_cell_list(x, r, margin):
-    """Candidate pairs of disks closer than r_i + r_j + margin [m], on a uniform grid.
-
-    The cell size h ≥ 2 r_max + margin, so a pair lies in neighbouring cells; disks are
-    counting-sorted by cell, and each disk tests the 3 × 3 cells around its own. The grid
-    is coarsened when it would have more than 4 n cells (sparse, spread-out disks).
-    Two passes (count, then fill) size the output exactly.
-
-    Args:
-        x: (n, 2) centres [m]; r: (n,) radii [m]; margin: travel allowance [m] ≥ 0.
-
-    Returns:
-        (k, 2) int64 pairs i < j, sorted lexicographically and unique.
-    """
+def _grid(x, r, margin):
+    """The cell-list grid of :func:`disk_pairs_cell_list`: origin (x0, y0) [m], cell size
+    h ≥ 2 r_max + margin [m] (coarser for sparse sets: at most about 4 n cells), and
+    nx × ny cells. A function of the set of disks, not of their order."""
     n = x.shape[0]
-    if n < 2:
-        return np.empty((0, 2), dtype=np.int64)
     x0 = x[0, 0]
     y0 = x[0, 1]
     x1 = x0
@@ -432,6 +421,173 @@ def disk_pairs_cell_list(x, r, margin):
         h *= math.sqrt(cells / (4.0 * n + 16.0))
     nx = int((x1 - x0) / h) + 1
     ny = int((y1 - y0) / h) + 1
+    return x0, y0, h, nx, ny
+
+
+@njit(cache=True)
+def _before(x, ids, a, b):
+    """Disk a comes before disk b in a cell: by x, then y, then id (coincident centres)."""
+    if x[a, 0] != x[b, 0]:
+        return x[a, 0] < x[b, 0]
+    if x[a, 1] != x[b, 1]:
+        return x[a, 1] < x[b, 1]
+    return ids[a] < ids[b]
+
+
+@njit(cache=True)
+def _sort_cell(perm, lo, hi, x, ids, tmp):
+    """Sort perm[lo:hi] by :func:`_before`: insertion sort (a cell holds a handful of
+    disks), bottom-up merge sort in tmp when it holds many (a clustered set)."""
+    m = hi - lo
+    if m <= 32:
+        for a in range(lo + 1, hi):
+            p = perm[a]
+            b = a - 1
+            while b >= lo and _before(x, ids, p, perm[b]):
+                perm[b + 1] = perm[b]
+                b -= 1
+            perm[b + 1] = p
+        return
+    width = 1
+    src = perm
+    dst = tmp
+    passes = 0
+    while width < m:
+        for left in range(lo, hi, 2 * width):
+            mid = min(left + width, hi)
+            right = min(left + 2 * width, hi)
+            a = left
+            b = mid
+            for k in range(left, right):
+                if a < mid and (b >= right or not _before(x, ids, src[b], src[a])):
+                    dst[k] = src[a]
+                    a += 1
+                else:
+                    dst[k] = src[b]
+                    b += 1
+        src, dst = dst, src
+        width *= 2
+        passes += 1
+    if passes % 2 == 1:  # the sorted run is in tmp
+        for k in range(lo, hi):
+            perm[k] = tmp[k]
+
+
+@njit(cache=True)
+def cell_order(x, r, margin, ids):
+    """The storage order of disks sorted by the cell of :func:`disk_pairs_cell_list`'s
+    grid they lie in, cells row by row (y, then x), and within a cell by x, then y.
+
+    Args:
+        x: (n, 2) centres [m] (storage order); r: (n,) radii [m]; margin: [m] ≥ 0.
+        ids: (n,) int64 original id of each stored disk (the last tie-break, for
+            coincident centres only).
+
+    Returns:
+        (perm, same): perm (n,) int64, the storage position now of the disk to store at
+        each position (``a[perm]`` is a in the new order); same is True when perm is the
+        identity. The order is a function of the disks' positions and radii (the grid),
+        not of their storage order nor of their numbering: the same disks given in any
+        order get the same new order. One counting sort over the cells, O(n + cells),
+        and an insertion sort of each cell's few disks.
+    """
+    n = x.shape[0]
+    perm = np.empty(n, dtype=np.int64)
+    if n < 2:
+        for k in range(n):
+            perm[k] = k
+        return perm, True
+    x0, y0, h, nx, ny = _grid(x, r, margin)
+    cell = np.empty(n, dtype=np.int64)
+    start = np.zeros(nx * ny + 1, dtype=np.int64)
+    for i in range(n):
+        cx = min(int((x[i, 0] - x0) / h), nx - 1)
+        cy = min(int((x[i, 1] - y0) / h), ny - 1)
+        cell[i] = cy * nx + cx
+        start[cell[i] + 1] += 1
+    for c in range(nx * ny):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    for i in range(n):
+        c = cell[i]
+        perm[fill[c]] = i
+        fill[c] += 1
+    tmp = np.empty(0, dtype=np.int64)
+    for c in range(nx * ny):
+        if start[c + 1] - start[c] > 32 and tmp.size == 0:
+            tmp = np.empty(n, dtype=np.int64)
+        if start[c + 1] - start[c] > 1:
+            _sort_cell(perm, start[c], start[c + 1], x, ids, tmp)
+    same = True
+    for k in range(n):
+        if perm[k] != k:
+            same = False
+            break
+    return perm, same
+
+
+@njit(cache=True)
+def carry_history_renumbered(old_pairs, old_hist, perm, new_pairs, new_hist):
+    """:func:`carry_history` across a renumbering of the disks: the new list is in the new
+    storage order, the old one in the old, and ``perm[k]`` is the old position of the disk
+    now at position k (:func:`cell_order`). Old pairs are sorted by (i, j); each new pair
+    looks its disks up in the row of the smaller old number (a handful of entries).
+    O(n + k_old + k_new). A pair whose disks swap roles (i < j in one numbering, j < i in
+    the other) keeps its slip (the relative displacement and the tangent t = ẑ × n both
+    change sign) and negates its rolling rotation φ = ∫(ω_i − ω_j) dt.
+
+    Returns:
+        The number of pairs whose history was carried over.
+    """
+    n = perm.size
+    start = np.zeros(n + 1, dtype=np.int64)
+    for a in range(old_pairs.shape[0]):
+        start[old_pairs[a, 0] + 1] += 1
+    for i in range(n):
+        start[i + 1] += start[i]
+    carried = 0
+    for b in range(new_pairs.shape[0]):
+        i = perm[new_pairs[b, 0]]
+        j = perm[new_pairs[b, 1]]
+        swapped = i > j
+        if swapped:
+            i, j = j, i
+        hit = -1
+        for a in range(start[i], start[i + 1]):
+            if old_pairs[a, 1] == j:
+                hit = a
+                break
+        if hit >= 0:
+            for c in range(new_hist.shape[1]):
+                new_hist[b, c] = old_hist[hit, c]
+            if swapped:
+                new_hist[b, H_ROLL] = -old_hist[hit, H_ROLL]
+            carried += 1
+        else:
+            for c in range(new_hist.shape[1]):
+                new_hist[b, c] = 0.0
+    return carried
+
+
+@njit(cache=True)
+def disk_pairs_cell_list(x, r, margin):
+    """Candidate pairs of disks closer than r_i + r_j + margin [m], on a uniform grid.
+
+    The cell size h ≥ 2 r_max + margin, so a pair lies in neighbouring cells; disks are
+    counting-sorted by cell, and each disk tests the 3 × 3 cells around its own. The grid
+    is coarsened when it would have more than 4 n cells (sparse, spread-out disks).
+    Two passes (count, then fill) size the output exactly.
+
+    Args:
+        x: (n, 2) centres [m]; r: (n,) radii [m]; margin: travel allowance [m] ≥ 0.
+
+    Returns:
+        (k, 2) int64 pairs i < j, sorted lexicographically and unique.
+    """
+    n = x.shape[0]
+    if n < 2:
+        return np.empty((0, 2), dtype=np.int64)
+    x0, y0, h, nx, ny = _grid(x, r, margin)
     cx = np.empty(n, dtype=np.int64)
     cy = np.empty(n, dtype=np.int64)
     start = np.zeros(nx * ny + 1, dtype=np.int64)

@@ -7,7 +7,11 @@ distributed to the facet nodes (:mod:`masonry_fdem.interactions.disks._facet_ker
 Candidate (disk, facet) pairs come from the alternating digital tree of the local facets'
 boxes queried with the disks' boxes, both inflated by a travel margin; they are found
 again when a disk or a facet node has moved by half the margin. The friction history is
-kept per (disk, block) pair, so a disk rolling over a vertex keeps it.
+kept per (disk, block) pair, so a disk rolling over a vertex keeps it. When the disks
+sort themselves (:class:`~masonry_fdem.interactions.disks.Disks`, a new ``generation``),
+the pairs are renumbered to the new storage positions of their disks, with their
+history, at the next ``update()``; ``disk_ids`` holds the disks' ``ids`` the pair
+numbers refer to (part of the state, so a restored state is renumbered too).
 
 Every rank computes the contacts of the blocks it owns; the forces on the disks are
 summed over ranks (every rank holds every disk). Units SI.
@@ -51,7 +55,7 @@ class DiskBlockContact(Interaction):
 
     name = "disk_block"
     state_attributes = ("pairs", "ptr", "cand", "params", "hist", "out", "parts", "work",
-                        "dissipated", "u_ref", "x_ref", "rebuilds")
+                        "dissipated", "u_ref", "x_ref", "rebuilds", "disk_ids")
 
     def __init__(self, disks, model, *, friction: float | None = None, stiffness: float = 1.0,
                  rel_overlap: float = 0.01, tangential_ratio: float = 0.5,
@@ -87,7 +91,7 @@ class DiskBlockContact(Interaction):
         nd = len(disks.names)
         bnames = blocks.material_names
         self.block_mat = blocks.block_material.astype(np.int64)
-        r_ref = float(disks.r.mean())
+        r_ref = math.fsum(disks.r) / disks.n  # exactly rounded: the same in any order
         self.table = np.zeros((nd, len(bnames), DF.N_PARAM))
         for a, dn in enumerate(disks.names):
             dm = disks.materials[dn]
@@ -119,6 +123,8 @@ class DiskBlockContact(Interaction):
         self._sum = np.zeros(3 * disks.n)
         self.rebuilds = 0
         self._fresh = True
+        self.disk_ids = disks.ids.copy()  # the disks' storage order the pairs refer to
+        self._generation = disks.generation
 
     # ------------------------------------------------------------------ time step
     def stable_omega2(self) -> dict[str, float]:
@@ -148,6 +154,9 @@ class DiskBlockContact(Interaction):
         d = self.disks
         nf = self.facets.shape[0]
         hist_old, keys_old = self.hist, self._keys() if self.pairs.size else np.zeros(0, np.int64)
+        if keys_old.size > 1 and np.any(keys_old[1:] < keys_old[:-1]):  # renumbered
+            by_key = np.argsort(keys_old, kind="stable")
+            hist_old, keys_old = hist_old[by_key], keys_old[by_key]
         if nf == 0:
             qi = np.zeros(0, dtype=np.int64)
             it = np.zeros(0, dtype=np.int64)
@@ -197,10 +206,28 @@ class DiskBlockContact(Interaction):
         """Find the candidate (disk, facet) pairs again once a disk or a facet node has
         moved by half the margin (collective)."""
         u, xd = state.u[BLOCKS], state.u["disks"].reshape(-1, 2)
+        self._follow_disks()
         if (self._fresh or DK.max_move(xd, self.x_ref) > 0.5 * self.margin
                 or DK.max_node_move(u, self.u_ref, self.nodes) > 0.5 * self.margin):
             self._rebuild(u, xd)
             self._fresh = False
+
+    def _follow_disks(self) -> None:
+        """Renumber the pairs (and the disks' reference positions) if the disks were
+        permuted since last seen; the pair order is restored at the next rebuild."""
+        d = self.disks
+        if self._generation == d.generation:
+            return
+        self._generation = d.generation
+        if np.array_equal(self.disk_ids, d.ids):
+            return
+        new_of_old = d.slot[self.disk_ids]
+        self.pairs[:, 0] = new_of_old[self.pairs[:, 0]]
+        self.x_ref[new_of_old] = self.x_ref.copy()
+        self.disk_ids[:] = d.ids
+
+    def _state_changed(self) -> None:
+        self._generation = -1  # a restored state may refer to another storage order
 
     def add_forces(self, state: State) -> None:
         """Contact forces on the local block nodes, and on the disks summed over ranks
@@ -225,9 +252,10 @@ class DiskBlockContact(Interaction):
         state.f["disk_rotations"] += buf[2 * n:]
 
     def disk_contacts(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """This rank's disk–block contacts of the last evaluation: (k,) disk ids, (k, 2)
-        force on the disk [N] (normal, damping and friction), (k, 2) contact point x_c [m]
-        (for :meth:`Disks.cell_stress` and :meth:`Disks.contact_counts`)."""
+        """This rank's disk–block contacts of the last evaluation: (k,) disks (storage
+        positions; ``disks.ids`` of them in the user's numbering), (k, 2) force on the
+        disk [N] (normal, damping and friction), (k, 2) contact point x_c [m] (for
+        :meth:`Disks.cell_stress` and :meth:`Disks.contact_counts`)."""
         touch = self.out[:, DF.O_AREA] > 0.0
         o = self.out[touch]
         n = o[:, [DF.O_NX, DF.O_NY]]

@@ -18,6 +18,43 @@ factor of a few, which a uniform grid serves best), rebuilt when a disk has move
 the margin since the last rebuild; the tangential and rolling histories of persisting
 pairs are carried over.
 
+Storage order. The contact kernels run over the pair list and read and write the disks
+of each pair: when neighbours in space are far apart in memory every pair misses the
+cache, and throughput then depended on the order the user made the disks in (0.41–0.78×
+LAMMPS's disk-steps per second numbered at random against 0.77–1.10× in spatial order,
+``benchmarks/disks.py``). So the set sorts itself: at the first rebuild the solvers
+trigger (the first ``update()``) and every ``sort_every``-th rebuild after it, the disks
+are stored in the order of the cells of the cell-list grid, row by row (y, then x), and
+by x, then y within a cell (:func:`~masonry_fdem.interactions.disks._kernels.cell_order`).
+Row-major cells rather than a Morton or Hilbert key: the pair search walks this very
+grid, so disk i's neighbours lie in i's own row of cells and the next one — three
+sequential streams a hardware prefetcher follows, whose working set (three rows of
+cells) stays in L2 up to ~10⁶–10⁷ disks in a square region — and the order costs one
+counting sort, no key. Within a cell by position (the id only for coincident centres),
+so that the order is a function of the disks themselves, not of their numbering: two
+runs of the same disks given in different orders store them alike from the first step
+on, and then perform the same operations in the same order — bitwise equal (only the
+solver's initial kinetic energy, summed before the first step, differs by round-off).
+
+The sort permutes every per-disk array in place (:meth:`Disks._permute`: those of the two
+dof sets through :meth:`DofSet.permute`, which records the event — a ``generation``
+counter and the new ``order`` — for the solvers to move their own per-dof arrays, and
+r, m, material, ids here) and renumbers the pair list with its friction and rolling
+history (:func:`~masonry_fdem.interactions.disks._kernels.carry_history_renumbered`); a
+:class:`DiskBlockContact` renumbers its (disk, block) pairs when it sees ``generation``
+change. ``Disks(..., sort=False)`` keeps the user's order.
+
+What the user sees. Until the first step the storage order is the user's (set ``v``,
+``omega``, :meth:`fix` as before). After it, the per-disk attributes ``x``, ``theta``,
+``v``, ``omega``, ``f``, ``torque``, ``r``, ``m``, ``inertia``, ``mat``, ``fixed`` and the
+disk numbers in ``pairs`` are in STORAGE order: ``ids[k]`` is the original index (the
+position in the arrays given to the constructor) of the disk stored at k, ``slot[i]``
+where original disk i is stored, and :meth:`by_id` turns a per-disk array into the user's
+numbering. :meth:`fix`, :meth:`contact_counts`, :meth:`save` / :meth:`load` and the disk
+output (:class:`~masonry_fdem.io.disk_output.DiskOutput`) speak the user's numbering;
+sums over disks (energies, :meth:`cell_stress`, :meth:`bulk_density`, :meth:`weight`)
+do not depend on the order.
+
 A fill is brought to rest by ``ExplicitSolver(..., local_damping=0.7)`` (Cundall's local
 damping) until :meth:`Disks.unbalanced_ratio` is small; :meth:`Disks.cell_stress` and
 :meth:`Disks.bulk_density` then measure the averaged stress and density in a cell.
@@ -110,11 +147,15 @@ class Disks(Interaction):
         max_overlap: the largest relative overlap δ/r_min expected, which bounds the
             Hertz stiffness in the stable time step (default 0.02).
         comm: MPI communicator (all ranks hold all disks).
+        sort: store the disks in cell order from the first step on (see the module
+            docstring); False keeps the order given.
+        sort_every: sort at every this many pair-list rebuilds (≥ 1), after the first
+            one of the run.
     """
 
     name = "disks"
     state_attributes = ("x", "theta", "v", "omega", "fixed", "pairs", "hist", "work",
-                        "rebuilds")
+                        "rebuilds", "ids")
 
     def __init__(
         self,
@@ -127,6 +168,8 @@ class Disks(Interaction):
         margin: float | None = None,
         max_overlap: float = 0.02,
         comm: MPI.Comm = MPI.COMM_WORLD,
+        sort: bool = True,
+        sort_every: int = 10,
     ):
         x = np.array(x, dtype=float, copy=True)
         r = np.array(r, dtype=float, copy=True).ravel()
@@ -175,12 +218,21 @@ class Disks(Interaction):
         if not self.margin >= 0:
             raise ValueError("margin must be >= 0 m")
         self.max_overlap = float(max_overlap)
+        if int(sort_every) < 1:
+            raise ValueError(f"sort_every must be >= 1, got {sort_every}")
+        self.sort = bool(sort)
+        self.sort_every = int(sort_every)
+        self.ids = np.arange(self.n, dtype=np.int64)  # original id of each stored disk
+        self.slot = np.arange(self.n, dtype=np.int64)  # storage position of each id
+        self.generation = 0  # permutations of the storage so far
+        self._sorted_at = None  # the rebuild count at the last sort (None: not yet)
+        self._fresh = True  # the first update() rebuilds (and sorts)
         self.pairs = np.empty((0, 2), dtype=np.int64)
         self.hist = np.zeros((0, DK.N_HIST))
         self._x_ref = self.x.copy()
         self.rebuilds = 0
         self.work = np.zeros(DK.N_WORK)
-        self._rebuild(self.x)
+        self._rebuild(sort=False)
         self._dofsets = (
             DofSet("disks", self.x.reshape(-1), self.v.reshape(-1), np.repeat(self.m, 2),
                    self.f.reshape(-1), f_ext=self._weight.reshape(-1), presc=self._fixed_xy),
@@ -195,9 +247,21 @@ class Disks(Interaction):
         self._weight[:] = self.m[:, None] * self.g[None, :]
 
     def fix(self, sel: np.ndarray) -> None:
-        """Hold the selected disks (boolean mask or indices) in place."""
-        self.fixed[np.asarray(sel)] = 1
+        """Hold the selected disks in place: a boolean mask over the disks or their
+        indices, in the user's numbering (the order given to the constructor)."""
+        chosen = np.arange(self.n)[np.asarray(sel)]
+        self.fixed[self.slot[chosen]] = 1
         self._fixed_xy[:] = np.repeat(self.fixed, 2)
+
+    def by_id(self, a: np.ndarray) -> np.ndarray:
+        """A per-disk array in storage order (first axis n: ``x``, ``v``, ``f``, ...)
+        as a new array in the user's numbering: row i belongs to original disk i."""
+        a = np.asarray(a)
+        if a.shape[:1] != (self.n,):
+            raise ValueError(f"a per-disk array has {self.n} rows, got shape {a.shape}")
+        out = np.empty_like(a)
+        out[self.ids] = a
+        return out
 
     @property
     def weight(self) -> float:
@@ -216,7 +280,8 @@ class Disks(Interaction):
         smallest disk at the overlap ``max_overlap · r_min`` (:func:`pair_omega2` on the
         stiffest, unloading branch)."""
         rmin = float(self.r.min())
-        k = int(np.argmin(self.r))
+        smallest = np.flatnonzero(self.r == rmin)  # the lightest of them: any order
+        k = int(smallest[np.argmin(self.m[smallest])])
         m, inertia = float(self.m[k]), float(self.inertia[k])
         d = self.max_overlap * rmin
         w2 = 0.0
@@ -243,23 +308,54 @@ class Disks(Interaction):
         """Centres (x, y per disk) and rotations, with weights m g as applied forces."""
         return self._dofsets
 
-    def _rebuild(self, x: np.ndarray) -> None:
-        pairs = DK.disk_pairs_cell_list(x, self.r, self.margin)
+    def _rebuild(self, sort: bool = True) -> None:
+        """New candidate pairs at the current centres, after sorting the disks if it is
+        time to (history carried, renumbered if they moved)."""
+        perm = None
+        if sort and self.sort and (self._sorted_at is None
+                                   or self.rebuilds - self._sorted_at >= self.sort_every):
+            self._sorted_at = self.rebuilds
+            perm, same = DK.cell_order(self.x, self.r, self.margin, self.ids)
+            if same:
+                perm = None
+            else:
+                self._permute(perm)
+        pairs = DK.disk_pairs_cell_list(self.x, self.r, self.margin)
         hist = np.zeros((pairs.shape[0], DK.N_HIST))
-        DK.carry_history(self.pairs, self.hist, pairs, hist)
+        if perm is None:
+            DK.carry_history(self.pairs, self.hist, pairs, hist)
+        else:
+            DK.carry_history_renumbered(self.pairs, self.hist, perm, pairs, hist)
         self.pairs, self.hist = pairs, hist
-        self._x_ref[:] = x
+        self._x_ref[:] = self.x
         self.rebuilds += 1
 
+    def _permute(self, perm: np.ndarray) -> None:
+        """Store the disk now at position perm[k] at position k, in every per-disk array
+        (the dof sets' through :meth:`DofSet.permute`, which tells the solvers), and
+        count the event in ``generation``. The pair list is left to the caller (it still
+        holds the old numbers)."""
+        dofs, rot = self._dofsets
+        dofs.permute((2 * perm[:, None] + np.arange(2)[None, :]).ravel())
+        rot.permute(perm)  # theta, omega, inertia, torque, fixed
+        for a in (self.r, self.m, self.mat, self._x_ref, self.ids):
+            a[...] = a[perm]
+        self.slot[self.ids] = np.arange(self.n)
+        self.generation += 1
+
     def rebuild(self) -> None:
-        """Find the candidate pairs again now, at the current centres (history carried)."""
-        self._rebuild(self.x)
+        """Find the candidate pairs again now, at the current centres (history carried;
+        the disks are sorted first when it is time to)."""
+        self._rebuild()
+        self._fresh = False
 
     def update(self, state: State) -> None:
-        """Find the candidate pairs again once a disk has moved by half the margin."""
-        x = state.u["disks"].reshape(-1, 2)
-        if DK.max_move(x, self._x_ref) > 0.5 * self.margin:
-            self._rebuild(x)
+        """Find the candidate pairs again at the first call, and once a disk has moved
+        by half the margin (sorting the disks when it is time to)."""
+        x = state.u["disks"].reshape(-1, 2)  # a view of self.x
+        if self._fresh or DK.max_move(x, self._x_ref) > 0.5 * self.margin:
+            self._rebuild()
+            self._fresh = False
 
     def add_forces(self, state: State) -> None:
         """Disk–disk contact forces and torques at the current positions."""
@@ -284,16 +380,21 @@ class Disks(Interaction):
     def pair_forces(self) -> np.ndarray:
         """(k, 2) contact force [N] on disk j of each candidate pair (i, j) of ``pairs``
         (minus that on disk i), at the current centres with the friction history of the
-        last force evaluation; zero for pairs apart."""
+        last force evaluation; zero for pairs apart. ``pairs`` holds storage positions:
+        ``ids[pairs]`` are the disks in the user's numbering."""
         fc = np.zeros((self.pairs.shape[0], 2))
         DK.pair_forces(self.x, self.r, self.mat, self.table, self.pairs, self.hist,
                        self.width, fc)
         return fc
 
     def contact_counts(self, couplings: Sequence = ()) -> np.ndarray:
-        """(n,) number of contacts carrying a force of each disk: disk–disk, plus those
-        with blocks of the given :class:`DiskBlockContact` couplings (collective when
-        couplings are given)."""
+        """(n,) number of contacts carrying a force of each disk, in the user's
+        numbering: disk–disk, plus those with blocks of the given
+        :class:`DiskBlockContact` couplings (collective when couplings are given)."""
+        return self.by_id(self._contact_counts(couplings))
+
+    def _contact_counts(self, couplings: Sequence = ()) -> np.ndarray:
+        """:meth:`contact_counts` in storage order."""
         count = np.zeros(self.n, dtype=np.int64)
         for c in couplings:
             disk, _, _ = c.disk_contacts()
@@ -314,7 +415,7 @@ class Disks(Interaction):
         """
         if not np.any(self.g):
             raise ValueError("the unbalanced-force ratio needs gravity (add_gravity)")
-        held = (self.contact_counts(couplings) >= 2) & (self.fixed == 0)
+        held = (self._contact_counts(couplings) >= 2) & (self.fixed == 0)
         if not held.any():
             return math.inf
         unbal = np.linalg.norm(self.f[held] + self._weight[held], axis=1).mean()
@@ -369,31 +470,53 @@ class Disks(Interaction):
         inside = np.all((self.x >= lo) & (self.x < hi), axis=1)
         return float(self.m[inside].sum() / (area * self.width))
 
+    def set_state(self, state) -> None:
+        """Take a state of :meth:`state` (checkpoint, dynamic relaxation's restore): the
+        storage is first permuted to the state's order (its ``ids``), so that every
+        per-disk array, not only those of the state, matches it."""
+        ids = np.asarray(state["ids"], dtype=np.int64) if "ids" in state else self.ids
+        if not np.array_equal(ids, self.ids):
+            if ids.shape != self.ids.shape or not np.array_equal(np.sort(ids),
+                                                                 np.arange(self.n)):
+                raise ValueError("Disks.set_state: ids is not a permutation of the disks")
+            self._permute(self.slot[ids])
+        super().set_state(state)
+
     def _state_changed(self) -> None:
         self._fixed_xy[:] = np.repeat(self.fixed, 2)
         self._x_ref[:] = self.x
+        self.slot[self.ids] = np.arange(self.n)
 
     def checkpoint_state(self) -> dict:
-        """:meth:`state` and the centres [m] at the last search for pairs (a resumed run
-        searches again at the same steps as the run would have)."""
-        return {**self.state(), "__x_ref": self._x_ref.copy()}
+        """:meth:`state` (in its storage order, ``ids``), the centres [m] at the last
+        search for pairs, whether the first search is still to come and the rebuild count
+        of the last sort (a resumed run searches and sorts again at the same steps as the
+        run would have)."""
+        return {**self.state(), "__x_ref": self._x_ref.copy(), "__fresh": bool(self._fresh),
+                "__sorted_at": -1 if self._sorted_at is None else int(self._sorted_at)}
 
     def set_checkpoint_state(self, st) -> None:
-        """Take a state of :meth:`checkpoint_state`."""
+        """Take a state of :meth:`checkpoint_state` (the storage permuted to its order)."""
         st = dict(st)
         x_ref = st.pop("__x_ref")
+        fresh = st.pop("__fresh", False)
+        sorted_at = int(st.pop("__sorted_at", -1))
         self.set_state(st)
         self._x_ref[:] = x_ref
+        self._fresh = bool(fresh)
+        self._sorted_at = None if sorted_at < 0 else sorted_at
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> None:
-        """Write the disks (geometry, materials, state) to an ``.npz`` file (rank 0)."""
+        """Write the disks (geometry, materials, state) to an ``.npz`` file (rank 0), in
+        the user's numbering (the disks of :meth:`load` are numbered as these)."""
         if self.comm.rank == 0:
             mats = np.array([[*self.materials[n].row(), self.materials[n].density]
                              for n in self.names])
-            np.savez(path, x=self.x, r=self.r, mat=self.mat, names=np.array(self.names),
-                     mats=mats, theta=self.theta, v=self.v, omega=self.omega,
-                     fixed=self.fixed, width=self.width)
+            b = self.by_id
+            np.savez(path, x=b(self.x), r=b(self.r), mat=b(self.mat),
+                     names=np.array(self.names), mats=mats, theta=b(self.theta), v=b(self.v),
+                     omega=b(self.omega), fixed=b(self.fixed), width=self.width)
         self.comm.barrier()
 
     @classmethod
