@@ -136,6 +136,8 @@ def _run(fill: bool, comm):
     return assess(load_case(d), write=False, progress=False, comm=comm)
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget); "
+                    "under mpirun the fill case is compared across ranks instead")
 def test_fill_raises_the_collapse_load_of_a_single_span():
     bare = _run(False, MPI.COMM_WORLD)
     filled = _run(True, MPI.COMM_WORLD)
@@ -180,6 +182,8 @@ def _toml(d: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget); "
+                    "`make demo` runs the bridge demo under mpirun")
 def test_bridge_demo_sweeps_positions_and_draws_the_stress(tmp_path, monkeypatch):
     comm = MPI.COMM_WORLD
     tmp_path = Path(comm.bcast(str(tmp_path), root=0))  # (each rank has its own tmp_path)

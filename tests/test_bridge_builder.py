@@ -131,6 +131,8 @@ def _run(bridge, x, comm, vehicle=Vehicle(patch=0.2)):
                        max_displacement=0.04, stop_drop=0.05, grow=1.0, comm=comm)
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget); "
+                    "under mpirun the two-span bridge is compared across ranks instead")
 def test_two_span_bridge_on_soil_collapses_under_a_two_axle_vehicle():
     """A two-span bridge, soil under its pier, surfacing, a two-axle vehicle over the
     first span: it passes a peak, and at the peak the supports carry the bridge's weight

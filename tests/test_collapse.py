@@ -14,6 +14,8 @@ from masonry_fdem.solvers.limit_analysis import limit_analysis
 from masonry_fdem.solvers import DynamicRelaxation, Status
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process: two blocks on COMM_SELF "
+                    "(each rank ran the same alone; the suite's budget)")
 def test_rocking_block_collapses_at_the_overturning_load():
     """A 0.5 × 1 m block (600 kg/m³, 1 m wide) on a fixed base, pushed sideways at its top
     corner: it overturns about its toe at P = W b / (2 h) = 735.50 N (the rigid-block limit
@@ -29,8 +31,8 @@ def test_rocking_block_collapses_at_the_overturning_load():
     la = limit_analysis(lay, density=600.0, width=1.0, supports="base",
                         live_loads=[((0.0, 1.0), (1.0, 0.0))], friction=10.0)
     assert la.load_factor == pytest.approx(exact, rel=1e-9)
-    # two blocks: one process is enough (under mpirun each rank runs it alone; the
-    # parallel load_to_collapse is exercised by tests/test_assess.py)
+    # two blocks: one process is enough (the parallel load_to_collapse is exercised by
+    # tests/test_assess.py)
     blocks = lay.mesh(0.1, MPI.COMM_SELF)
     model = Model(blocks, {"brick": Material(600.0, 1e9, 0.2), "base": Material(600.0, 1e9, 0.2)},
                   width=1.0, comm=MPI.COMM_SELF)

@@ -118,7 +118,9 @@ class SectionCuts:
 def block_pair_resultants(interactions, pairs: np.ndarray) -> np.ndarray:
     """(m, 3): the force (Fx, Fy) [N] and its moment about the origin Mz [N m] that block
     ``pairs[i, 0]`` exerts on block ``pairs[i, 1]`` through the contact and joint terms
-    between them, at the last force evaluation (collective).
+    between them, at the last force evaluation, with the nodes at their reference
+    positions (collective). Anchors crossing the joint are not in it: the resultant is
+    the masonry's. Each pair of blocks is given once.
 
     The interactions that keep their terms' forces (contact pairs ``fp`` over
     ``pairs``/``facets``; joint points ``fq`` over ``ipa``/``ipb``) are used; each term
@@ -157,13 +159,13 @@ def block_pair_resultants(interactions, pairs: np.ndarray) -> np.ndarray:
             comm = it.comm
             fb = it.facet_block
             nodes = np.c_[it.facets[it.pairs[:, 0]], it.facets[it.pairs[:, 1]]]
-            x = it.X + it.u.reshape(-1, 2)
+            x = it.X  # (reference configuration, as the joint lines)
             add(fb[it.pairs[:, 0]], fb[it.pairs[:, 1]], it.fp, nodes, x, it.counted)
         elif hasattr(it, "fq") and hasattr(it, "ipa"):
             comm = it.comm
             blocks = it.seg_blocks[it.q_seg[it.local_ip]]
             nodes = np.c_[it.ipa, it.ipb]
-            x = it.X + it.u.reshape(-1, 2)
+            x = it.X  # (reference configuration, as the joint lines)
             add(blocks[:, 0], blocks[:, 1], it.fq, nodes, x, it.counted)
     if comm is not None:
         comm.Allreduce(MPI.IN_PLACE, out, op=MPI.SUM)

@@ -136,11 +136,12 @@ class ContactSettings:
 class BlockContact(Interaction):
     """Contact between the blocks of a model, across ranks too.
 
-    Every rank evaluates the pairs of its own facets and, for a facet of another rank
-    that falls within its inflated bounding box (a *ghost* facet), the pair is evaluated
-    by the lower of the two ranks and the forces on the ghost nodes are returned to their
-    owner. Ghost facets and nodes are found again at each neighbour-list rebuild; their
-    positions and velocities are refreshed every step.
+    Every rank evaluates the pairs of its own facets, with the facets of other ranks that
+    fall within its inflated bounding box (*ghost* facets): a pair across two ranks is
+    evaluated by both, each summing the forces on its own nodes (in the pairs' key
+    order: the same sums as on one rank), and counted in the energies and the tangent by
+    the lower. Ghost facets and nodes are found again at each neighbour-list rebuild;
+    their positions and velocities are refreshed every step.
 
     Args:
         model: the :class:`~masonry_fdem.model.Model`.
@@ -655,7 +656,7 @@ class BlockContact(Interaction):
 
     def add_tangent(self, tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the pairs in contact into ``tangent`` (the
-        positions of the last ``add_forces``; a cross-rank pair by the rank computing it,
+        positions of the last ``add_forces``; a cross-rank pair by the rank counting it,
         its rows of the other rank's nodes sent by PETSc)."""
         if self._ext_dofs is None or self._ext_dofs.size != self.u.size:
             self._ext_dofs = tangent.node_dofs(self.ext_input)

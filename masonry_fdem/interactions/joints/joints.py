@@ -503,7 +503,7 @@ class Joints(Interaction):
     def add_tangent(self, K: Tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the live integration points into ``K``
         (at the displacement of the last :meth:`add_forces`, with the same committed
-        history). Each point is added by the rank computing it, its side-B columns and
+        history). Each point is added by the rank counting it, its side-B columns and
         rows by the global numbers of the ghost nodes (PETSc sends the rows to their
         owner). Central differences of the force kernel, see :func:`._kernels.joint_tangent`.
         """
