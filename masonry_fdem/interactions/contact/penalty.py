@@ -165,7 +165,7 @@ class BlockContact(Interaction):
     """
 
     name = "contact"
-    state_attributes = ("keys", "tau", "tau_c", "excluded", "bonded_block", "energy",
+    state_attributes = ("keys", "tau", "tau_c", "excluded", "bonded_pairs", "energy",
                         "dissipated", "damped", "rebuilds")
 
     def __init__(self, model, settings: ContactSettings | None = None):
@@ -234,8 +234,9 @@ class BlockContact(Interaction):
         self._committed: tuple[np.ndarray, np.ndarray] | None = None
         # facet-pair keys (min·n + max of global facet ids) left out: bonded joints
         self.excluded = np.zeros(0, dtype=np.int64)
-        # blocks held on every side by intact bonded joints: no contact between two of them
-        self.bonded_block = np.zeros(blocks.n_blocks, dtype=bool)
+        # pairs of blocks joined by intact bonded joints (keys min·n + max of block ids):
+        # no contact between the two
+        self.bonded_pairs = np.zeros(0, dtype=np.int64)
         self.energy = np.zeros(K.N_ENERGY)
         self.dissipated = 0.0  # by friction [J]
         self.damped = 0.0  # by the normal dampers [J]
@@ -504,8 +505,10 @@ class BlockContact(Interaction):
         keep = (ra == me) | (rb == me)
         pairs, ra, rb = pairs[keep], ra[keep], rb[keep]
         counted = np.minimum(ra, rb) == me
-        both = (self.bonded_block[self.facet_block[pairs[:, 0]]]
-                & self.bonded_block[self.facet_block[pairs[:, 1]]])
+        nb = self.model.blocks.n_blocks
+        ba = self.facet_block[pairs[:, 0]]
+        bb = self.facet_block[pairs[:, 1]]
+        both = np.isin(np.minimum(ba, bb) * nb + np.maximum(ba, bb), self.bonded_pairs)
         pairs, counted = pairs[~both], counted[~both]
         # orient each pair by global facet id, so its two passes keep their meaning
         ga = self.ext_gid[pairs[:, 0]]
@@ -746,7 +749,7 @@ class BlockContact(Interaction):
             if k not in st:
                 raise KeyError(f"{type(self).__name__}: state lacks {k!r}")
         self.excluded = np.array(st["excluded"], dtype=np.int64)
-        self.bonded_block = np.array(st["bonded_block"], dtype=bool)
+        self.bonded_pairs = np.array(st["bonded_pairs"], dtype=np.int64)
         self.energy[...] = st["energy"]
         self.dissipated = float(st["dissipated"])
         self.damped = float(st["damped"])
@@ -763,12 +766,13 @@ class BlockContact(Interaction):
                 setattr(self, k, v.copy() if isinstance(v, np.ndarray) else v)
         self._sync(self.model.v)
 
-    def exclude(self, keys: np.ndarray, bonded_block: np.ndarray) -> None:
+    def exclude(self, keys: np.ndarray, bonded_pairs: np.ndarray) -> None:
         """Leave out the facet pairs ``keys`` (min·n + max of global facet ids: bonded
-        joints) and every pair between two blocks flagged in ``bonded_block`` (held all
-        round by intact joints); the candidates are found again before the next step."""
+        joints) and every facet pair between two blocks of ``bonded_pairs`` (min·n + max
+        of block ids: blocks joined by intact joints, which carry their contact); the
+        candidates are found again before the next step."""
         self.excluded = np.sort(np.asarray(keys, dtype=np.int64))
-        self.bonded_block = np.asarray(bonded_block, dtype=bool)
+        self.bonded_pairs = np.sort(np.asarray(bonded_pairs, dtype=np.int64))
         self.since = self.settings.rebuild_every
 
     def active_pairs(self) -> np.ndarray:

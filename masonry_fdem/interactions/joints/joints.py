@@ -25,8 +25,8 @@ their strength) and opened is handed over to the block contact, so no force jump
 has slid by more than half its length (there the two contacts agree when the contact
 penalty equals the joint's k_n), and one whose two facets have turned against each other
 by more than ``release_turn`` (a piece swung open about one closed end). While a segment
-is bonded, the block contact ignores its facet pair, and the pairs of two blocks held all
-round by bonded segments (no free facet).
+is bonded, the block contact ignores its facet pair, and every facet pair of two blocks
+joined only by bonded segments.
 
 Parallel: every rank knows every segment; a segment is evaluated by every rank holding one
 of its two blocks (the nodes of the other side exchanged every step), and each rank sums
@@ -334,6 +334,9 @@ class Joints(Interaction):
         bonded = np.array([jm is not None for jm in chosen], dtype=bool)
         # blocks with a dry joint keep their contact with every neighbour
         self.dry_blocks = np.unique(np.r_[ba[~bonded], bb[~bonded]]).astype(np.int64)
+        nbk = blocks.n_blocks
+        self._dry_pairs = np.unique(np.minimum(ba[~bonded], bb[~bonded]) * nbk
+                                    + np.maximum(ba[~bonded], bb[~bonded])).astype(np.int64)
         seg, fa, fb, mid = seg[bonded], fa[bonded], fb[bonded], mid[bonded]
         mats = [jm for jm in chosen if jm is not None]
         #: the joint material of each bonded segment (``seg_mid`` gives where it is)
@@ -403,11 +406,6 @@ class Joints(Interaction):
         self.n_commits = 0
         self.released = np.zeros(nseg, dtype=bool)
         self.seg_blocks = np.c_[fblock[fa], fblock[fb]]
-        # for "held all round": each block's boundary facets, their lengths and the
-        # segments on them (a block with a free facet can touch another block there)
-        self._n_facets = gf.shape[0]
-        self._facet_length = flen
-        self._facet_block = fblock
         self._tell_contact()
         # facet -> cell, for the state field
         self._facet_cell = _facet_cells(blocks, gf)
@@ -582,25 +580,20 @@ class Joints(Interaction):
         self._tell_contact()
 
     def _tell_contact(self) -> None:
-        """The contact ignores bonded facet pairs, and pairs of blocks bonded all round."""
+        """The contact ignores the bonded facet pairs, and every facet pair of two blocks
+        joined by intact segments only (their joints carry their contact, corners
+        included); two blocks with a segment handed over, or a dry joint, between them
+        keep their contact, and so do blocks that no segment joins (two fragments, each
+        held together by intact cracks, meet by contact)."""
         c = self.contact
         if c is None:
             return
         nb = self.model.blocks.n_blocks
-        bonded = np.zeros(nb, dtype=bool)
-        bonded[self.seg_blocks.ravel()] = True
-        bonded[self.seg_blocks[self.released].ravel()] = False
-        bonded[self.dry_blocks] = False
-        # held all round: every boundary facet of the block covered by intact segments
-        # (a block with a free face — an outer face, the face of a notch — can meet
-        # another block there, intact joints or not)
-        live = ~self.released
-        covered = np.zeros(self._n_facets)
-        for side in (0, 1):
-            np.add.at(covered, self.seg_facets[live, side], self.seg_length[live])
-        free = covered < (1.0 - 1e-6) * self._facet_length
-        bonded[np.unique(self._facet_block[free])] = False
-        c.exclude(self.seg_key[~self.released], bonded)
+        sb = self.seg_blocks
+        key = np.minimum(sb[:, 0], sb[:, 1]) * nb + np.maximum(sb[:, 0], sb[:, 1])
+        joined = np.setdiff1d(np.unique(key[~self.released]),
+                              np.r_[key[self.released], self._dry_pairs])
+        c.exclude(self.seg_key[~self.released], joined)
 
     def set_friction(self, material: JointMaterial, tan_phi: float) -> int:
         """Give the joints of ``material`` the friction coefficient ``tan_phi`` from now
