@@ -53,8 +53,7 @@ from masonry_fdem.solvers._setup import (
 from masonry_fdem.solvers.restart import (
     interactions_state,
     model_state,
-    set_interactions_state,
-    set_model_state,
+    set_solver_sets_state,
 )
 
 if TYPE_CHECKING:
@@ -471,13 +470,7 @@ class ExplicitSolver:
         if st["dt"] != self.dt:
             raise ValueError(f"the state's time step {st['dt']:.6g} s is not this solver's "
                              f"{self.dt:.6g} s")
-        if len(st["sets"]) != len(self.sets):
-            raise ValueError("the state has another set of dof sets")
-        set_model_state(self.model, st["model"])
-        set_interactions_state(self.interactions, st["interactions"])
-        for s, arrs in zip(self.sets, st["sets"], strict=True):
-            for k, a in arrs.items():
-                getattr(s, k)[...] = a
+        set_solver_sets_state(self, st)
         self.t, self.n = float(st["t"]), int(st["n"])
         self.kinetic0 = st["kinetic0"]
         self._start = st["start"]

@@ -94,3 +94,15 @@ def set_interactions_state(interactions: Sequence, states: Sequence[Mapping]) ->
             c.set_state(st)
     for c, st in later:
         c.set_checkpoint_state(st)
+
+
+def set_solver_sets_state(solver, st: Mapping) -> None:
+    """The part of a solver's :meth:`set_checkpoint_state` both solvers share: the model,
+    the interactions and the arrays of each dof set (collective)."""
+    if len(st["sets"]) != len(solver.sets):
+        raise ValueError("the state has another set of dof sets")
+    set_model_state(solver.model, st["model"])
+    set_interactions_state(solver.interactions, st["interactions"])
+    for s, arrs in zip(solver.sets, st["sets"], strict=True):
+        for k, a in arrs.items():
+            getattr(s, k)[...] = a

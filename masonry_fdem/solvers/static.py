@@ -51,8 +51,7 @@ from masonry_fdem.solvers._setup import as_interactions, owned_dofsets, prescrib
 from masonry_fdem.solvers.restart import (
     interactions_state,
     model_state,
-    set_interactions_state,
-    set_model_state,
+    set_solver_sets_state,
 )
 from masonry_fdem.solvers.status import RunStatus, Status
 
@@ -530,13 +529,7 @@ class StaticSolver:
         """Take a state of :meth:`checkpoint_state` (collective)."""
         if st.get("solver") != "static":
             raise ValueError(f"not a static solver's state ({st.get('solver')!r})")
-        if len(st["sets"]) != len(self.sets):
-            raise ValueError("the state has another set of dof sets")
-        set_model_state(self.model, st["model"])
-        set_interactions_state(self.interactions, st["interactions"])
-        for s, arrs in zip(self.sets, st["sets"], strict=True):
-            for k, a in arrs.items():
-                getattr(s, k)[...] = a
+        set_solver_sets_state(self, st)
         self.load_factor = st["load_factor"]
         self._load_factor = st["_load_factor"]
         self.dead_factor = st["dead_factor"]
