@@ -17,37 +17,42 @@ __all__ = ["gather_rows", "node_lists"]
 
 
 @njit(cache=True)
-def gather_rows(fq, ptr, idx, f):
-    """f[2 i], f[2 i + 1] += Σ over ``idx[ptr[i]:ptr[i + 1]]`` of the rows of ``fq`` seen
+def gather_rows(fq, nodes, ptr, idx, f):
+    """f[2 n], f[2 n + 1] += Σ over ``idx[ptr[i]:ptr[i + 1]]`` of the rows of ``fq`` seen
     as (4 n_terms, 2) (row 4 k + slot: term k's force on its node ``slot``) [N], in
-    that order."""
+    that order, for each node n = ``nodes[i]`` that has terms."""
     f2 = fq.reshape(-1, 2)
-    for i in range(ptr.size - 1):
+    for i in range(nodes.size):
         sx = 0.0
         sy = 0.0
         for e in range(ptr[i], ptr[i + 1]):
             r = idx[e]
             sx += f2[r, 0]
             sy += f2[r, 1]
-        f[2 * i] += sx
-        f[2 * i + 1] += sy
+        n = nodes[i]
+        f[2 * n] += sx
+        f[2 * n + 1] += sy
 
 
-def node_lists(nodes: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray]:
-    """CSR lists (ptr (n_nodes + 1,), idx) of the rows 4 k + slot of the terms acting on
-    each of the first ``n_nodes`` (owned) nodes, in term order; ``nodes`` (n_terms, 4)
-    are the local node numbers of each term (ghosts ≥ n_nodes are left out)."""
+def node_lists(nodes: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """CSR lists of the rows 4 k + slot of the terms acting on each of the first
+    ``n_nodes`` (owned) nodes that has any, in term order: (the nodes, ptr, idx), ptr
+    one longer than the nodes; ``nodes`` (n_terms, 4) are the local node numbers of
+    each term (ghosts ≥ n_nodes are left out). Nodes without terms are not listed, so
+    a sum costs the nodes the interaction touches, not the model's."""
     nodes = np.asarray(nodes, dtype=np.int64).reshape(-1)
     rows = np.arange(nodes.size, dtype=np.int64)
     mine = nodes < n_nodes
     nodes, rows = nodes[mine], rows[mine]
     order = np.lexsort((rows, nodes))
-    ptr = np.zeros(n_nodes + 1, dtype=np.int64)
-    np.cumsum(np.bincount(nodes, minlength=n_nodes), out=ptr[1:])
-    return ptr, np.ascontiguousarray(rows[order], dtype=np.int64)
+    counts = np.bincount(nodes, minlength=n_nodes)
+    touched = np.flatnonzero(counts).astype(np.int64)
+    ptr = np.zeros(touched.size + 1, dtype=np.int64)
+    np.cumsum(counts[touched], out=ptr[1:])
+    return touched, ptr, np.ascontiguousarray(rows[order], dtype=np.int64)
 
 
 def precompile() -> None:
     """Compile :func:`gather_rows`."""
-    ptr, idx = node_lists(np.arange(4).reshape(1, 4), 4)
-    gather_rows(np.ones((1, 8)), ptr, idx, np.zeros(8))
+    nodes, ptr, idx = node_lists(np.arange(4).reshape(1, 4), 4)
+    gather_rows(np.ones((1, 8)), nodes, ptr, idx, np.zeros(8))

@@ -225,7 +225,8 @@ class BlockContact(Interaction):
         self.counted = np.zeros(0)
         self.fp = np.zeros((0, 8))
         self.fdp = np.zeros((0, 8))
-        self._gptr = np.zeros(model.n_nodes + 1, dtype=np.int64)
+        self._gnodes = np.zeros(0, dtype=np.int64)
+        self._gptr = np.zeros(1, dtype=np.int64)
         self._gidx = np.zeros(0, dtype=np.int64)
         # the committed history by key, as at the last commit (None before one): a
         # rebuild between commits (a failed Newton iterate far from the committed state)
@@ -247,6 +248,7 @@ class BlockContact(Interaction):
         self._fd = np.zeros(nloc2)
         self._u1 = np.zeros(nloc2)
         self._u2 = np.zeros(nloc2)
+        self._fd_nodes = np.zeros(0, dtype=np.int64)  # where _fd may be non-zero
         self._fd_live = False
         self.travel = math.inf
         self.since = 0
@@ -414,7 +416,11 @@ class BlockContact(Interaction):
         mass = m.mass[0 : 2 * m.n_nodes : 2]
         # every sum over a block's nodes in their input order: the same on any number of
         # ranks (a block lies on one rank; the others add zeros)
-        o = self._node_order = np.argsort(m.node_input, kind="stable").astype(np.int64)
+        o = np.argsort(m.node_input, kind="stable").astype(np.int64)
+        # each block's nodes in input order, block after block (for _block_centroids)
+        self._block_nodes = o[np.argsort(m.node_block[o], kind="stable")]
+        self._block_ptr = np.zeros(nb + 1, dtype=np.int64)
+        np.cumsum(np.bincount(m.node_block, minlength=nb), out=self._block_ptr[1:])
         sums = np.zeros((nb, 3))
         np.add.at(sums, m.node_block[o], np.c_[mass, mass[:, None] * m.X][o])
         sums = self.comm.allreduce(sums)
@@ -448,7 +454,7 @@ class BlockContact(Interaction):
     def _block_centroids(self, parallel: bool) -> None:
         """The blocks' current centroids [m] (collective in parallel; no allocation)."""
         m = self.model
-        K.block_moments(m.X, m.u.x.array, m.node_block, m.mass, self._node_order,
+        K.block_moments(m.X, m.u.x.array, m.mass, self._block_ptr, self._block_nodes,
                         self._moments)
         if parallel:
             self.comm.Allreduce(MPI.IN_PLACE, self._moments, op=MPI.SUM)
@@ -554,7 +560,7 @@ class BlockContact(Interaction):
         # the pairs' forces on their nodes, and the lists that sum them into this rank's
         self.fp = np.zeros((self.pairs.shape[0], 8))
         self.fdp = np.zeros((self.pairs.shape[0], 8))
-        self._gptr, self._gidx = node_lists(
+        self._gnodes, self._gptr, self._gidx = node_lists(
             np.c_[self.facets[self.pairs[:, 0]], self.facets[self.pairs[:, 1]]],
             self.n_local_nodes)
         self.tau, self.tau_c = (np.ascontiguousarray(h, dtype=float).reshape(-1, 2)
@@ -632,7 +638,7 @@ class BlockContact(Interaction):
             self.tau, self.counted, self.fp, self.fdp, self.energy, self._work,
         )
         nloc = 2 * self.n_local_nodes
-        gather_rows(self.fp, self._gptr, self._gidx, f)
+        gather_rows(self.fp, self._gnodes, self._gptr, self._gidx, f)
         self.dissipated += self.energy[2]
         self._account_dampers(live, v[:nloc], dt)
 
@@ -646,16 +652,16 @@ class BlockContact(Interaction):
         nloc = 2 * self.n_local_nodes
         u_now = self.model.u.x.array[:nloc]
         if self._fd_live:
-            self.damped -= K.midpoint_work(self._fd, u_now, self._u2)
+            self.damped -= K.nodal_midpoint_work(self._fd, self._fd_nodes, u_now, self._u2)
         # u(n−1) as the solver had it (not the u of the last call: there was none before
-        # the first step, and a static evaluation in between is no step)
-        np.multiply(v, -dt, out=self._u2)
-        self._u2 += u_now
-        self._u1[:] = u_now
+        # the first step, and a static evaluation in between is no step), kept at the
+        # nodes the dampers act on (fd is zero elsewhere, and is zeroed where it was)
+        K.keep_damper_terms(self._fd, self._fd_nodes, self._gnodes, u_now, v, dt,
+                            self._u1, self._u2)
+        self._fd_nodes = self._gnodes
         self._fd_live = live
         if live:
-            self._fd.fill(0.0)
-            gather_rows(self.fdp, self._gptr, self._gidx, self._fd)
+            gather_rows(self.fdp, self._gnodes, self._gptr, self._gidx, self._fd)
 
     def add_tangent(self, tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the pairs in contact into ``tangent`` (the
@@ -702,7 +708,8 @@ class BlockContact(Interaction):
         forces over the solver's midpoint increments, the last one's up to u(n) only,
         fd(n)·(u(n) − u(n−1))/2 (the explicit solver's account carries every store to
         the half step by the work of its forces over the other half)."""
-        pending = (-K.midpoint_work(self._fd, self._u1, self._u2) if self._fd_live else 0.0)
+        pending = (-K.nodal_midpoint_work(self._fd, self._fd_nodes, self._u1, self._u2)
+                   if self._fd_live else 0.0)
         n, t, d, c = self.comm.allreduce(np.array([self.energy[0], self.energy[1],
                                                    self.dissipated, self.damped + pending]))
         return {"stored": float(n + t), "dissipated": float(d + c),
@@ -716,8 +723,9 @@ class BlockContact(Interaction):
         self.rebuild(np.zeros_like(self.model.v))
 
     #: what :meth:`checkpoint_state` keeps beyond :meth:`state`
-    _checkpoint_extra = ("travel", "since", "_u_rebuild", "_fd", "_u1", "_u2", "_fd_live",
-                         "_work", "_acc", "cdamp", "fp", "fdp", "inv_mass", "inv_inertia")
+    _checkpoint_extra = ("travel", "since", "_u_rebuild", "_fd", "_u1", "_u2", "_fd_nodes",
+                         "_fd_live", "_work", "_acc", "cdamp", "fp", "fdp", "inv_mass",
+                         "inv_inertia")
 
     def checkpoint_state(self) -> dict:
         """:meth:`state` and what a resumed run needs to go on exactly as the run would

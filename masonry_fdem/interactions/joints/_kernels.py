@@ -84,18 +84,18 @@ E_ELASTIC, E_DISSIPATED = 0, 1
 FD_STEP = 1e-8
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def softening_factor(p, k1, k2):
     """R = min(exp(−f_t κ1/G_fI), exp(−c κ2/G_fII)) (1 when a mode has no strength)."""
-    r = 1.0
-    if p[P_FT] > 0.0 and p[P_GF1] > 0.0:
+    r = 1.0  # exp(−0) = 1 exactly: an undamaged point skips the exponentials
+    if k1 != 0.0 and p[P_FT] > 0.0 and p[P_GF1] > 0.0:
         r = min(r, math.exp(-p[P_FT] * k1 / p[P_GF1]))
-    if p[P_C] > 0.0 and p[P_GF2] > 0.0:
+    if k2 != 0.0 and p[P_C] > 0.0 and p[P_GF2] > 0.0:
         r = min(r, math.exp(-p[P_C] * k2 / p[P_GF2]))
     return r
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def cap_strength(p, k3):
     """σ̄_c(κ3) [Pa]: hardening to f_c at κ_p, then softening to f_c/7."""
     fc = p[P_FC]
@@ -243,7 +243,7 @@ def _tension_shear_return(p, sn_tr, at, k1, k2, tpsi):
     return l1, l2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def interface_law(p, dn, ds, s0, s1):
     """Return mapping at one integration point.
 
@@ -354,7 +354,7 @@ def interface_law(p, dn, ds, s0, s1):
     s1[S_DS] = ds
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
     """Forces of one integration point: the single source of forces and tangent.
 
@@ -586,6 +586,36 @@ def _branch(s0q, s1q):
 
 
 @njit(cache=True)
+def hand_over_flags(X, u, ipa, ipb, ipmat, props, s0, seg, seg_length, release_ratio,
+                    release_cos, done, turned):
+    """Per segment (``seg[q]`` the local segment of point q): ``done`` the number of its
+    points spent — open with a softening factor at or below ``release_ratio``, or slid by
+    more than half the segment's length [m] — and ``turned`` whether a point's facets have
+    turned against each other beyond ``release_cos`` (B's facet reversed: parallel when
+    bonded). Both are zeroed first."""
+    done[:] = 0
+    turned[:] = False
+    for q in range(ipa.shape[0]):
+        p = props[ipmat[q]]
+        r = softening_factor(p, s0[q, S_K1], s0[q, S_K2])
+        if ((s0[q, S_STATUS] == OPEN and r <= release_ratio)
+                or abs(s0[q, S_DS]) > 0.5 * seg_length[seg[q]]):
+            done[seg[q]] += 1
+        a0 = ipa[q, 0]
+        a1 = ipa[q, 1]
+        b0 = ipb[q, 0]
+        b1 = ipb[q, 1]
+        dax = (X[a1, 0] + u[2 * a1]) - (X[a0, 0] + u[2 * a0])
+        day = (X[a1, 1] + u[2 * a1 + 1]) - (X[a0, 1] + u[2 * a0 + 1])
+        dbx = (X[b0, 0] + u[2 * b0]) - (X[b1, 0] + u[2 * b1])
+        dby = (X[b0, 1] + u[2 * b0 + 1]) - (X[b1, 1] + u[2 * b1 + 1])
+        la = math.sqrt(dax * dax + day * day)
+        lb = math.sqrt(dbx * dbx + dby * dby)
+        if (dax * dbx + day * dby) < release_cos * la * lb:
+            turned[seg[q]] = True
+
+
+@njit(cache=True)
 def commit(alive, s0, s1):
     """Copy the trial state of live points into the committed state."""
     for q in range(alive.shape[0]):
@@ -630,6 +660,9 @@ def precompile() -> None:
                   props, alive, s0, FD_STEP, np.zeros(64, np.int64), np.zeros(64, np.int64),
                   np.zeros(64))
     commit(alive, s0, s1)
+    hand_over_flags(X, u, ip, ip[:, ::-1].copy(), np.zeros(1, np.int64), props, s0,
+                    np.zeros(1, np.int64), half, 0.01, 0.9, np.zeros(1, np.int64),
+                    np.zeros(1, np.bool_))
     node_spring_bound(ip, ip, half, half, half, np.zeros(1, np.int64), props, alive,
                       np.zeros(4))
     interface_law(props[0], 2.0, 1.0, s0[0], s1[0])

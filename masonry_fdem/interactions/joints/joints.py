@@ -394,11 +394,15 @@ class Joints(Interaction):
         self._setup_nodes(block_rank)
         m = self.local_ip.size
         self.fq = np.zeros((m, 8))
-        self._gptr, self._gidx = node_lists(np.c_[self.ipa, self.ipb], self.n_local_nodes)
+        self._gnodes, self._gptr, self._gidx = node_lists(np.c_[self.ipa, self.ipb],
+                                                          self.n_local_nodes)
         self.xia = np.ascontiguousarray(self.g_xia[self.local_ip])
         self.xib = np.ascontiguousarray(self.g_xib[self.local_ip])
         self.w = np.ascontiguousarray(self.g_w[self.local_ip])
         self.ipmat = np.ascontiguousarray(self.g_mat[self.local_ip])
+        self._seg_local = np.ascontiguousarray(q_seg[self.local_ip], dtype=np.int64)
+        self._seg_done = np.zeros(nseg, dtype=np.int64)  # scratch of _hand_over
+        self._seg_turned = np.zeros(nseg, dtype=np.bool_)
         self.alive = np.ones(m, dtype=np.int8)
         self.s0 = JK.empty_state(m)
         self.s1 = JK.empty_state(m)
@@ -496,7 +500,7 @@ class Joints(Interaction):
         JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
                         self.ipmat, self.props, self.alive, self.counted, self.s0, self.s1,
                         self.fq, self.energy)
-        gather_rows(self.fq, self._gptr, self._gidx, f)
+        gather_rows(self.fq, self._gnodes, self._gptr, self._gidx, f)
 
     def add_tangent(self, K: Tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the live integration points into ``K``
@@ -548,35 +552,19 @@ class Joints(Interaction):
             self._hand_over()
 
     def _hand_over(self) -> None:
-        s = self.s0
-        seg_local = self.q_seg[self.local_ip]
-        p = self.props[self.ipmat]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            e1 = np.where(p[:, JK.P_FT] > 0,
-                          np.exp(-p[:, JK.P_FT] * s[:, JK.S_K1] / p[:, JK.P_GF1]), 1.0)
-            e2 = np.where(p[:, JK.P_C] > 0,
-                          np.exp(-p[:, JK.P_C] * s[:, JK.S_K2] / p[:, JK.P_GF2]), 1.0)
-        spent = np.minimum(e1, e2) <= self.release_ratio
-        done_ip = (((s[:, JK.S_STATUS] == JK.OPEN) & spent)
-                   | (np.abs(s[:, JK.S_DS]) > 0.5 * self.seg_length[seg_local]))
-        # a segment goes when both its points are done, or when its facets have turned
-        # against each other by more than release_turn (B's facet reversed: parallel
-        # when bonded)
-        x = self.X + self.u.reshape(-1, 2)
-        da = x[self.ipa[:, 1]] - x[self.ipa[:, 0]]
-        db = x[self.ipb[:, 0]] - x[self.ipb[:, 1]]
-        cos = np.einsum("ij,ij->i", da, db) / (np.linalg.norm(da, axis=1)
-                                                * np.linalg.norm(db, axis=1))
-        turned = np.bincount(seg_local, weights=(cos < self.release_cos).astype(float),
-                             minlength=self.n_segments) > 0
-        cnt = np.bincount(seg_local, weights=done_ip.astype(float), minlength=self.n_segments)
-        new = np.flatnonzero(((cnt == 2) | turned) & ~self.released
+        # a segment goes when both its points are spent (open and softened to
+        # release_ratio, or slid by half the segment), or when its facets have turned
+        # against each other by more than release_turn
+        JK.hand_over_flags(self.X, self.u, self.ipa, self.ipb, self.ipmat, self.props,
+                           self.s0, self._seg_local, self.seg_length, self.release_ratio,
+                           self.release_cos, self._seg_done, self._seg_turned)
+        new = np.flatnonzero(((self._seg_done == 2) | self._seg_turned) & ~self.released
                              & (self.seg_rank == self.comm.rank))
         allnew = np.concatenate(self.comm.allgather(new)).astype(np.int64)
         if allnew.size == 0:
             return
         self.released[allnew] = True
-        self.alive[self.released[seg_local]] = 0
+        self.alive[self.released[self._seg_local]] = 0
         self._tell_contact()
 
     def _tell_contact(self) -> None:
