@@ -308,21 +308,22 @@ def lammps_check(lmp: Path) -> str | None:
                              env=lammps_env(lmp)).stdout
     except (OSError, subprocess.SubprocessError):
         return None
-    if "GRANULAR" not in out or "gran/hooke/history" not in out:
+    if "GRANULAR" not in out or "gran/hertz/history" not in out:
         return None
     m = re.search(r"Large-scale Atomic/Molecular Massively Parallel Simulator - (.+)", out)
     return m.group(1).strip() if m else "LAMMPS"
 
 
 @dataclass
-class Hooke:
-    kn: float  # [N/m]
-    kt: float  # [N/m]
-    gamman: float  # [1/s]
-    gammat: float  # [1/s]
+class Law:
+    style: str  # LAMMPS pair style
+    kn: float  # [N/m] (hooke) or [N/m^2] (hertz: times sqrt(delta R*))
+    kt: float  # as kn
+    gamman: float  # [1/s] (hertz: times sqrt(delta R*) [1/(m s)])
+    gammat: float
 
 
-def hooke_for(p: Packing) -> Hooke:
+def hooke_for(p: Packing) -> Law:
     """Linear law with the Hertz secant stiffness at the median overlap, our Mindlin
     ratio, and the dashpot of our restitution for a pair of r0 disks."""
     t = DK.pair_table(MAT.row()[None, :])[0, 0]
@@ -332,7 +333,25 @@ def hooke_for(p: Packing) -> Hooke:
     ln_e = math.log(MAT.restitution)
     zeta = -ln_e / math.sqrt(math.pi**2 + ln_e**2)
     gamman = 2.0 * zeta * math.sqrt(kn / m_eff)  # damping force = m_eff γ_n v_n
-    return Hooke(kn, t[DK.T_KAPPA] * kn, gamman, 0.5 * gamman)
+    return Law("gran/hooke/history", kn, t[DK.T_KAPPA] * kn, gamman, 0.5 * gamman)
+
+
+def hertz_for(p: Packing) -> Law:
+    """LAMMPS ``gran/hertz/history``, our law's counterpart: F_n = k_n δ √(δ R*) (R* =
+    r_i r_j/(r_i + r_j)), the tangential spring k_t √(δ R*) and the dashpots scaled
+    alike. k_n = K/√R* with our Hertz constant K (:func:`DK.hertz_k`: exact for two r0
+    disks), k_t the tangent of our Mindlin spring (κ · (3/2) K √δ), and the dashpots of
+    :func:`hooke_for` at the median overlap divided by its √(δ R*)."""
+    t = DK.pair_table(MAT.row()[None, :])[0, 0]
+    r_star = 0.5 * R0
+    kn = DK.hertz_k(t[DK.T_ESTAR], R0, R0, WIDTH) / math.sqrt(r_star)
+    h = hooke_for(p)
+    poly = math.sqrt(p.overlap_median * r_star)
+    return Law("gran/hertz/history", kn, 1.5 * t[DK.T_KAPPA] * kn, h.gamman / poly,
+               h.gammat / poly)
+
+
+LAWS = {"hertz": hertz_for, "hooke": hooke_for}
 
 
 def write_data(p: Packing, path: Path) -> None:
@@ -354,10 +373,11 @@ def write_data(p: Packing, path: Path) -> None:
                    fmt=["%d"] + ["%.17g"] * 6)
 
 
-def lammps_input(p: Packing, data: Path, steps: int, every_step: bool) -> str:
-    h = hooke_for(p)
+def lammps_input(p: Packing, data: Path, steps: int, every_step: bool,
+                 law: str = "hertz") -> str:
+    h = LAWS[law](p)
     check = "no" if every_step else "yes"
-    law = " ".join(repr(float(c)) for c in (h.kn, h.kt, h.gamman, h.gammat, MAT.friction))
+    coef = " ".join(repr(float(c)) for c in (h.kn, h.kt, h.gamman, h.gammat, MAT.friction))
     return f"""units si
 dimension 2
 boundary f f p
@@ -366,7 +386,7 @@ comm_modify vel yes
 read_data {data}
 set group all density/disc {float(MAT.density * WIDTH)!r}
 group mobile type 1
-pair_style gran/hooke/history {law} 1
+pair_style {h.style} {coef} 1
 pair_coeff * *
 neighbor {float(MARGIN * p.r.min())!r} bin
 neigh_modify delay 0 every 1 check {check}
@@ -385,9 +405,9 @@ run 0 post no
 
 
 def run_lammps(lmp: Path, p: Packing, data: Path, steps: int, every_step: bool,
-               workdir: Path) -> Result:
+               workdir: Path, law: str = "hertz") -> Result:
     inp = workdir / ("in.every" if every_step else "in.margin")
-    inp.write_text(lammps_input(p, data, steps, every_step))
+    inp.write_text(lammps_input(p, data, steps, every_step, law))
     proc = subprocess.run([str(lmp), "-in", str(inp), "-log", "none", "-echo", "none"],
                           capture_output=True, text=True, env=lammps_env(lmp), cwd=workdir)
     out = proc.stdout
@@ -426,18 +446,28 @@ def main() -> None:
                     help="numberings of the disks to time, side by side (default both): "
                          "row by row (spatial) and a random permutation (random)")
     ap.add_argument("--shuffle", action="store_true", help="the same as --orders random")
+    ap.add_argument("--law", choices=sorted(LAWS), default="hertz",
+                    help="LAMMPS pair style: gran/hertz/history (default: Hertz like ours) "
+                         "or gran/hooke/history (linear, Hertz secant stiffness)")
     ap.add_argument("--no-profile", action="store_true",
                     help="skip the breakdown of our step")
     args = ap.parse_args()
     orders = ["random"] if args.shuffle else list(dict.fromkeys(args.orders))
 
+    style = LAWS[args.law](packing(200, seed=0)).style
     print("Disk-steps per second: masonry_fdem Disks (Hertz-Mindlin) against LAMMPS "
-          "gran/hooke/history, same dense 2D packing, same run.")
+          f"{style}, same dense 2D packing, same run.")
     print("Serial: one process, one thread, in both codes. Medians of the runs; "
           "ratio = ours / LAMMPS.")
-    print("NB: our normal law is Hertz (F ~ delta^1.5, hysteretic restitution), LAMMPS "
-          "gran/hooke/history is linear (F = kn delta, viscous dashpot); kn = Hertz secant "
-          "at the median overlap, so the overlaps and contacts are alike.")
+    if args.law == "hertz":
+        print("Laws: both Hertz (F = K delta^1.5, LAMMPS's kn = our K/sqrt(R*)) with a "
+              "tangential spring stiffening as sqrt(delta); restitution ours hysteretic, "
+              "LAMMPS a viscous dashpot (scaled by sqrt(delta R*)) for e at the median "
+              "overlap.")
+    else:
+        print("NB: our normal law is Hertz (F ~ delta^1.5, hysteretic restitution), LAMMPS "
+              "gran/hooke/history is linear (F = kn delta, viscous dashpot); kn = Hertz "
+              "secant at the median overlap, so the overlaps and contacts are alike.")
     lmp = None if args.no_lammps else find_lammps(args.lmp)
     version = lammps_check(lmp) if lmp is not None else None
     if version is None:
@@ -464,13 +494,13 @@ def main() -> None:
             p0 = packing(int(size))
             steps = args.steps or default_steps(p0.n)
             reps = args.repeats or (3 if p0.n < 500_000 else 1)
-            h = hooke_for(p0)
+            h = LAWS[args.law](p0)
             print(f"\nN = {p0.n} ({int(size):.0e} asked; {int(p0.fixed.sum())} fixed in the "
                   f"ring), {steps} steps x {reps} run(s), dt = {p0.dt:.4g} s; initial "
                   f"contacts/disk {p0.contacts0:.2f}, overlap median "
                   f"{p0.overlap_median / R0:.2%} r0, max {p0.max_overlap / 1.5:.2%} r_min; "
-                  f"LAMMPS kn = {h.kn:.4g} N/m, kt = {h.kt:.4g} N/m, gamma_n = "
-                  f"{h.gamman:.4g} 1/s", flush=True)
+                  f"LAMMPS {h.style} kn = {h.kn:.4g}, kt = {h.kt:.4g}, gamma_n = "
+                  f"{h.gamman:.4g} (SI)", flush=True)
             for order in orders:
                 p = renumbered(p0, order)
                 data = workdir / f"disks_{order}.data"
@@ -483,7 +513,7 @@ def main() -> None:
                         res["ours_" + key].append(run_ours(p, steps, every))
                         if lmp is not None:
                             res["lmp_" + key].append(run_lammps(lmp, p, data, steps, every,
-                                                                workdir))
+                                                                workdir, args.law))
                     line = (f"  {order:>7} run {rep + 1}: ours {res['ours_m'][-1].seconds:.3f}"
                             f" s (margin) {res['ours_e'][-1].seconds:.3f} s (every step)")
                     if lmp is not None:

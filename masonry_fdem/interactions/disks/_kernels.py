@@ -160,7 +160,7 @@ def pair_table(props):
     return table
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def hertz_k(e_star, r1, r2, thick):
     """Hertz constant K [N/m^{3/2}] of F = K δ^{3/2} for disks of radii r1, r2 [m] and
     thickness thick [m] (r2 = inf: a disk against a flat wall)."""
@@ -214,7 +214,7 @@ def pair_omega2(k_n, kappa, mu_r, r1, r2, m1, m2, i1, i2):
     return max(k_n * inv_m, w_t)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _spring(u, k_old, k_new, du, cap):
     """One step of an elastic–perfectly plastic spring with elastic displacement u.
 
@@ -224,7 +224,7 @@ def _spring(u, k_old, k_new, du, cap):
     """
     loss = 0.0
     if k_old > 0.0 and k_new > k_old:
-        u_s = u * k_old / k_new
+        u_s = u * (k_old / k_new)
         loss = 0.5 * (k_old * u * u - k_new * u_s * u_s)
         u = u_s
     elif k_new < k_old:
@@ -258,61 +258,78 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
         work: (N_WORK,) out: W_EN, W_ET, W_ER set to the energies stored now, W_HYST,
             W_FRIC, W_ROLL incremented by this step's dissipation [J].
     """
+    # the energies and dissipations are summed in locals (a store to ``work`` per pair
+    # was a memory round trip in the loop's critical path), the overlap is tested on the
+    # squared distance before any square root, and one reciprocal gives the normal
     e_n = 0.0
     e_t = 0.0
     e_r = 0.0
+    w_hyst = 0.0
+    w_fric = 0.0
+    w_roll = 0.0
     for k in range(pairs.shape[0]):
         i = pairs[k, 0]
         j = pairs[k, 1]
         dx = x[j, 0] - x[i, 0]
         dy = x[j, 1] - x[i, 1]
-        d = math.sqrt(dx * dx + dy * dy)
-        delta = r[i] + r[j] - d
-        if delta <= 0.0 or d <= 0.0:  # apart (or coincident: no normal): impact over
+        ri = r[i]
+        rj = r[j]
+        rs = ri + rj
+        d2 = dx * dx + dy * dy
+        if d2 >= rs * rs or d2 <= 0.0:  # apart (or coincident: no normal): impact over
             for c in range(N_HIST):
                 hist[k, c] = 0.0
             continue
-        nx = dx / d
-        ny = dy / d
+        d = math.sqrt(d2)
+        delta = rs - d
+        inv_d = 1.0 / d
+        nx = dx * inv_d
+        ny = dy * inv_d
         tx = -ny
         ty = nx
-        tab = table[mat[i], mat[j]]
-        e = tab[T_REST]
-        kh = hertz_k(tab[T_ESTAR], r[i], r[j], thick)
+        mi = mat[i]
+        mj = mat[j]
+        e = table[mi, mj, T_REST]
+        kappa = table[mi, mj, T_KAPPA]
+        kh = hertz_k(table[mi, mj, T_ESTAR], ri, rj, thick)
+        sq = math.sqrt(delta)
         # --- normal: hysteretic Hertz
         dmax = hist[k, H_DMAX]
-        if delta > dmax:
-            work[W_HYST] += 0.4 * (1.0 - e * e) * kh * (
-                delta * delta * math.sqrt(delta) - dmax * dmax * math.sqrt(dmax))
-            dmax = delta
-        s = (delta - dmax * (1.0 - e * e)) / (e * e)  # = δ on the loading branch
         fn = 0.0
-        if s > 0.0:
-            fn = kh * s * math.sqrt(s)
-            e_n += 0.4 * e * e * fn * s
+        if delta >= dmax:  # loading (s = δ)
+            w_hyst += 0.4 * (1.0 - e * e) * kh * (
+                delta * delta * sq - dmax * dmax * math.sqrt(dmax))
+            dmax = delta
+            fn = kh * delta * sq
+            e_n += 0.4 * e * e * fn * delta
+        else:
+            s = (delta - dmax * (1.0 - e * e)) / (e * e)
+            if s > 0.0:
+                fn = kh * s * math.sqrt(s)
+                e_n += 0.4 * e * e * fn * s
         # --- relative motion of the contact point (middle of the overlap)
-        ai = r[i] - 0.5 * delta
-        aj = r[j] - 0.5 * delta
+        ai = ri - 0.5 * delta
+        aj = rj - 0.5 * delta
         vt = (v[j, 0] - v[i, 0]) * tx + (v[j, 1] - v[i, 1]) * ty - ai * omega[i] - aj * omega[j]
-        kn = 1.5 * kh * math.sqrt(delta)
+        kn = 1.5 * kh * sq
         kn_old = hist[k, H_KN]
         # --- tangential: Mindlin spring, Coulomb cap
-        kt = tab[T_KAPPA] * kn
-        slip, loss = _spring(hist[k, H_SLIP], tab[T_KAPPA] * kn_old, kt, vt * dt,
-                             tab[T_MU] * fn)
-        work[W_FRIC] += loss
+        kt = kappa * kn
+        slip, loss = _spring(hist[k, H_SLIP], kappa * kn_old, kt, vt * dt,
+                             table[mi, mj, T_MU] * fn)
+        w_fric += loss
         ft = -kt * slip  # tangential force on j along t
         e_t += 0.5 * kt * slip * slip
         # --- rolling: elastic–plastic rolling spring
         mr = 0.0
         phi = 0.0
-        mu_r = tab[T_MU_ROLL]
+        mu_r = table[mi, mj, T_MU_ROLL]
         if mu_r > 0.0:
-            r_star = r[i] * r[j] / (r[i] + r[j])
+            r_star = ri * rj / rs
             c = ROLL_STIFFNESS * mu_r * mu_r * r_star * r_star
             phi, loss = _spring(hist[k, H_ROLL], c * kn_old, c * kn,
                                 (omega[i] - omega[j]) * dt, mu_r * r_star * fn)
-            work[W_ROLL] += loss
+            w_roll += loss
             mr = -c * kn * phi  # rolling torque on i
             e_r += 0.5 * c * kn * phi * phi
         hist[k, H_SLIP] = slip
@@ -331,6 +348,9 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
     work[W_EN] = e_n
     work[W_ET] = e_t
     work[W_ER] = e_r
+    work[W_HYST] += w_hyst
+    work[W_FRIC] += w_fric
+    work[W_ROLL] += w_roll
 
 
 @njit(cache=True)
@@ -570,13 +590,49 @@ def carry_history_renumbered(old_pairs, old_hist, perm, new_pairs, new_hist):
 
 
 @njit(cache=True)
+def _cell_sweep(x, r, margin, order, start, nx, ny, buf):
+    """The candidate pairs (min id, max id) of :func:`disk_pairs_cell_list`'s cells into
+    ``buf``: each disk against the disks after it in its own cell and against all of the
+    four cells ahead (right; and left, straight, right in the row above). Returns their
+    number, −1 if ``buf`` is too small (growing it here, in the loop, cost as much as the
+    search: numba then counts references at every store)."""
+    cnt = 0
+    cap = buf.shape[0]
+    for gy in range(ny):
+        for gx in range(nx):
+            c = gy * nx + gx
+            for a in range(start[c], start[c + 1]):
+                i = order[a]
+                for nb in range(5):
+                    if nb == 0:
+                        lo = a + 1
+                        hi = start[c + 1]
+                    else:
+                        hx = gx + (1 if nb == 1 else nb - 3)
+                        hy = gy + (0 if nb == 1 else 1)
+                        if hx < 0 or hx >= nx or hy >= ny:
+                            continue
+                        h2 = hy * nx + hx
+                        lo = start[h2]
+                        hi = start[h2 + 1]
+                    for q in range(lo, hi):
+                        j = order[q]
+                        if _near(x, r, margin, i, j):
+                            if cnt == cap:
+                                return -1
+                            buf[cnt, 0] = min(i, j)
+                            buf[cnt, 1] = max(i, j)
+                            cnt += 1
+    return cnt
+
+
+@njit(cache=True)
 def disk_pairs_cell_list(x, r, margin):
     """Candidate pairs of disks closer than r_i + r_j + margin [m], on a uniform grid.
 
     The cell size h ≥ 2 r_max + margin, so a pair lies in neighbouring cells; disks are
-    counting-sorted by cell, and each disk tests the 3 × 3 cells around its own. The grid
+    counting-sorted by cell, and each pair of neighbouring cells is tested once. The grid
     is coarsened when it would have more than 4 n cells (sparse, spread-out disks).
-    Two passes (count, then fill) size the output exactly.
 
     Args:
         x: (n, 2) centres [m]; r: (n,) radii [m]; margin: travel allowance [m] ≥ 0.
@@ -603,33 +659,36 @@ def disk_pairs_cell_list(x, r, margin):
         c = cy[i] * nx + cx[i]
         order[fill[c]] = i
         fill[c] += 1
+    # one sweep over the cells, each pair met once, into a buffer (a dense packing
+    # has ~3 candidates per disk); sweep again with a twice larger one if it overflows
+    buf = np.empty((max(4 * n, 16), 2), dtype=np.int64)
+    cnt = _cell_sweep(x, r, margin, order, start, nx, ny, buf)
+    while cnt < 0:
+        buf = np.empty((2 * buf.shape[0], 2), dtype=np.int64)
+        cnt = _cell_sweep(x, r, margin, order, start, nx, ny, buf)
+    # sorted by (i, j): counted into rows by i, each row's few j by insertion
     offs = np.zeros(n + 1, dtype=np.int64)
-    out = np.empty((0, 2), dtype=np.int64)
-    for sweep in range(2):
-        for i in range(n):
-            m = 0
-            for gy in range(max(cy[i] - 1, 0), min(cy[i] + 2, ny)):
-                for gx in range(max(cx[i] - 1, 0), min(cx[i] + 2, nx)):
-                    c = gy * nx + gx
-                    for q in range(start[c], start[c + 1]):
-                        j = order[q]
-                        if j > i and _near(x, r, margin, i, j):
-                            if sweep == 1:
-                                out[offs[i] + m, 0] = i
-                                out[offs[i] + m, 1] = j
-                            m += 1
-            if sweep == 0:
-                offs[i + 1] = offs[i] + m
-            else:  # insertion sort of the row's j (a handful of neighbours)
-                for a in range(offs[i] + 1, offs[i + 1]):
-                    jj = out[a, 1]
-                    b = a - 1
-                    while b >= offs[i] and out[b, 1] > jj:
-                        out[b + 1, 1] = out[b, 1]
-                        b -= 1
-                    out[b + 1, 1] = jj
-        if sweep == 0:
-            out = np.empty((offs[n], 2), dtype=np.int64)
+    for k in range(cnt):
+        offs[buf[k, 0] + 1] += 1
+    for i in range(n):
+        offs[i + 1] += offs[i]
+    out = np.empty((cnt, 2), dtype=np.int64)
+    for k in range(cnt):
+        i = buf[k, 0]
+        out[offs[i], 0] = i
+        out[offs[i], 1] = buf[k, 1]
+        offs[i] += 1
+    lo = 0
+    for i in range(n):
+        hi = offs[i]  # the end of row i now
+        for a in range(lo + 1, hi):
+            jj = out[a, 1]
+            b = a - 1
+            while b >= lo and out[b, 1] > jj:
+                out[b + 1, 1] = out[b, 1]
+                b -= 1
+            out[b + 1, 1] = jj
+        lo = hi
     return out
 
 

@@ -59,6 +59,27 @@ def root_region(points, lo, hi):
 
 
 @njit(cache=True)
+def _split(src, src_i, dst, dst_i, s0, e0, j, mid):
+    """Stable split of rows s0 + 1 .. e0 − 1 of (src, src_i) into (dst, dst_i): those with
+    coordinate j below ``mid`` first (branch-free destination). Returns their number."""
+    m = src.shape[1]
+    nl = 0
+    for t in range(s0 + 1, e0):
+        nl += src[t, j] < mid
+    pl = s0 + 1
+    pr = s0 + 1 + nl
+    for t in range(s0 + 1, e0):
+        is_left = np.int64(src[t, j] < mid)
+        q = pr + (pl - pr) * is_left
+        for jj in range(m):
+            dst[q, jj] = src[t, jj]
+        dst_i[q] = src_i[t]
+        pl += is_left
+        pr += 1 - is_left
+    return nl
+
+
+@njit(cache=True)
 def adt_build(points, perm, lo, hi, node_box, item, left, right, scratch_box, scratch_item):
     """Build the ADT of the boxes ``points`` into preallocated arrays.
 
@@ -122,30 +143,19 @@ def adt_build(points, perm, lo, hi, node_box, item, left, right, scratch_box, sc
         top -= 1
         depth = max(depth, level + 1)
         if in_scratch:
-            src, src_i, dst, dst_i = scratch_box, scratch_item, node_box, item
             for jj in range(m):
                 node_box[s0, jj] = scratch_box[s0, jj]
             item[s0] = scratch_item[s0]
-        else:
-            src, src_i, dst, dst_i = node_box, item, scratch_box, scratch_item
         if e0 - s0 <= 1:
             continue
         j = level % m
         mid = 0.5 * (rlo[j] + rhi[j])
-        nl = 0
-        for t in range(s0 + 1, e0):
-            nl += src[t, j] < mid
-        # stable split into dst: branch-free destination
-        pl = s0 + 1
-        pr = s0 + 1 + nl
-        for t in range(s0 + 1, e0):
-            is_left = np.int64(src[t, j] < mid)
-            q = pr + (pl - pr) * is_left
-            for jj in range(m):
-                dst[q, jj] = src[t, jj]
-            dst_i[q] = src_i[t]
-            pl += is_left
-            pr += 1 - is_left
+        # the split from one buffer into the other (called with the arrays in their
+        # roles, not by swapping array variables in the loop, which numba pays for)
+        if in_scratch:
+            nl = _split(scratch_box, scratch_item, node_box, item, s0, e0, j, mid)
+        else:
+            nl = _split(node_box, item, scratch_box, scratch_item, s0, e0, j, mid)
         if top + 2 >= cap:
             cap *= 2
             st_s = _grow_int(st_s, cap)
