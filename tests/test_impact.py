@@ -89,7 +89,8 @@ def test_damper_never_pulls_and_friction_sees_the_clipped_force():
         one = np.ones(1)
         CK.facet_facet_forces(X, u, v, facets, own, own, np.array([[0, 1]], dtype=np.int64),
                               eps * one, eps * one, mu * one, cd * one, 0.1 * one, w, 1e-3,
-                              np.zeros((1, 2)), one, f, fd, energy, np.zeros(CK.N_WORK))
+                              np.zeros((1, 2)), one, f, fd, energy, np.zeros(CK.N_WORK),
+                              np.zeros((1, 2, CK.N_WORK)), False)
         f = f[0]
         return f[[5, 7]].sum(), f[[4, 6]].sum(), energy  # on the block: up, along x
 

@@ -175,6 +175,19 @@ def _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, out
 
 
 @njit(cache=True, inline="always")
+def _pass_points(X, u, facets, fs, fm):
+    """The end points of slave facet fs and master facet fm relative to the reference
+    position of the master's first node (as :func:`_pass_zone` returns them)."""
+    ox = X[facets[fm, 0], 0]
+    oy = X[facets[fm, 0], 1]
+    q1x, q1y = _pos(X, u, facets[fs, 0], ox, oy)
+    q2x, q2y = _pos(X, u, facets[fs, 1], ox, oy)
+    p1x, p1y = _pos(X, u, facets[fm, 0], ox, oy)
+    p2x, p2y = _pos(X, u, facets[fm, 1], ox, oy)
+    return q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y
+
+
+@njit(cache=True, inline="always")
 def _pass_zone(X, u, facets, fprev, fnext, fs, fm, depth, work):
     """Zone of slave facet fs on master facet fm; returns the four facet end points
     relative to the reference position of the master's first node."""
@@ -234,17 +247,20 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         tau[k, 1] = 0.0
         return 0.0, 0.0, 0.0, 0.0, False, -1.0
     return _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp,
-                        depth, width, dt, tau, f, fdamp, work, stick)
+                        depth, width, dt, tau, f, fdamp, work, stick, work, False)
 
 
 @njit(cache=True, inline="always")
 def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
-                 width, dt, tau, f, fdamp, work, stick):
+                 width, dt, tau, f, fdamp, work, stick, zones, use_zones):
     """:func:`_pair_forces` of a pair that the box test did not reject: its two passes.
 
     Inlined (as are the small functions it calls) into the loops over pairs, which test
     the boxes first: a call per pair cost more than the pass itself (~150 ns, measured:
-    the pair loop of a 14 500-facet wall went from 21 to 6 ms per step)."""
+    the pair loop of a 14 500-facet wall went from 21 to 6 ms per step).
+
+    ``use_zones``: take each pass's zone from ``zones[k, p]`` (:func:`contact_damping`
+    found them at the same positions) instead of finding it again."""
     e_n = 0.0
     e_t = 0.0
     d_f = 0.0
@@ -262,9 +278,17 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         m2n = facets[fm, 1]
         sb = 4 if p == 0 else 0  # the slave's and the master's slots in f
         mb = 4 - sb
-        q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_zone(
-            X, u, facets, fprev, fnext, fs, fm, depth[k], work
-        )
+        if use_zones:
+            if zones[k, p, Z_ACTIVE] == 0.0:  # separated
+                tau[k, p] = 0.0
+                continue
+            q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_points(X, u, facets, fs, fm)
+            for c in range(N_WORK):
+                work[c] = zones[k, p, c]
+        else:
+            q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_zone(
+                X, u, facets, fprev, fnext, fs, fm, depth[k], work
+            )
         if work[Z_ACTIVE] == 0.0:  # separated
             tau[k, p] = 0.0
             continue
@@ -376,7 +400,7 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
 
 @njit(cache=True)
 def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
-                       width, dt, tau, counted, fp, fdp, energy, work):
+                       width, dt, tau, counted, fp, fdp, energy, work, zones, use_zones):
     """Penalty normal, viscous normal and Coulomb friction forces of all candidate pairs,
     pair by pair (summed into the nodes by :func:`masonry_fdem.interactions._sums.gather_rows`,
     in an order that does not depend on how the blocks are spread over ranks).
@@ -399,6 +423,8 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
             frictional dissipation this step, damper dissipation this step with the
             velocities the dampers see (the half step before)] [J].
         work: (N_WORK,) scratch.
+        zones: (n_p, 2, N_WORK) the zones of the pairs' passes at these positions, as
+            :func:`contact_damping` leaves them, used when ``use_zones`` (else not read).
     """
     e_n = 0.0
     e_t = 0.0
@@ -408,13 +434,18 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
         for j in range(8):
             fp[k, j] = 0.0
             fdp[k, j] = 0.0
-        if _far_apart(X, u, facets, pairs[k, 0], pairs[k, 1], depth[k]):
+        if use_zones:
+            if zones[k, 0, Z_ACTIVE] == 0.0 and zones[k, 1, Z_ACTIVE] == 0.0:
+                tau[k, 0] = 0.0
+                tau[k, 1] = 0.0
+                continue
+        elif _far_apart(X, u, facets, pairs[k, 0], pairs[k, 1], depth[k]):
             tau[k, 0] = 0.0  # out of reach (see _pair_forces)
             tau[k, 1] = 0.0
             continue
         a, b, c, d, _, _ = _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n,
                                         eps_t, mu, cdamp, depth, width, dt, tau, fp[k],
-                                        fdp[k], work, False)
+                                        fdp[k], work, False, zones, use_zones)
         w = counted[k]
         e_n += w * a
         e_t += w * b
@@ -429,7 +460,7 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
 @njit(cache=True)
 def contact_damping(X, u, facets, fprev, fnext, pairs, facet_block, eps_n, depth, width,
                     slot, slot_block, inv_mass, inv_inertia, centroid, zeta1, zeta2, acc,
-                    cdamp, work):
+                    cdamp, work, zones):
     """The normal damping coefficient c_n [Pa s/m] of every candidate pair.
 
     Restitution is a property of an impact between two bodies, so the damper is set per
@@ -472,12 +503,17 @@ def contact_damping(X, u, facets, fprev, fnext, pairs, facet_block, eps_n, depth
         centroid: (n_blocks, 2) block centroids [m].
         zeta1, zeta2: damping ratios of a face and of a vertex impact.
         acc: (n_slots, N_ACC) scratch; cdamp: (n_p,) out [Pa s/m].
+        zones: (n_p, 2, N_WORK) out: the zone of each pass (:func:`_zone`'s results;
+            inactive for a pair out of reach), for :func:`facet_facet_forces` at the same
+            positions.
     """
     acc[:, :] = 0.0
     for k in range(pairs.shape[0]):
         fa = pairs[k, 0]
         fb = pairs[k, 1]
         if _far_apart(X, u, facets, fa, fb, depth[k]):
+            zones[k, 0, Z_ACTIVE] = 0.0
+            zones[k, 1, Z_ACTIVE] = 0.0
             continue
         sl = slot[k]
         for p in range(2):
@@ -486,6 +522,8 @@ def contact_damping(X, u, facets, fprev, fnext, pairs, facet_block, eps_n, depth
             q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_zone(
                 X, u, facets, fprev, fnext, fs, fm, depth[k], work
             )
+            for c in range(N_WORK):
+                zones[k, p, c] = work[c]
             if work[Z_ACTIVE] == 0.0:
                 continue
             lm = math.hypot(p2x - p1x, p2y - p1y)
@@ -794,14 +832,16 @@ def precompile() -> None:
     pairs = np.array([[0, 2]], dtype=np.int64)
     p1 = np.ones(1)
     fp = np.zeros((1, 8))
-    facet_facet_forces(X, u, u, facets, fprev, fnext, pairs, p1, p1, p1, p1, p1, 1.0, 1e-3,
-                       np.zeros((1, 2)), p1, fp, fp.copy(), np.zeros(N_ENERGY),
-                       np.zeros(N_WORK))
+    zones = np.zeros((1, 2, N_WORK))
+    for use in (False, True):
+        facet_facet_forces(X, u, u, facets, fprev, fnext, pairs, p1, p1, p1, p1, p1, 1.0,
+                           1e-3, np.zeros((1, 2)), p1, fp, fp.copy(), np.zeros(N_ENERGY),
+                           np.zeros(N_WORK), zones, use)
     blk = np.zeros(4, dtype=np.int64)
     contact_damping(X, u, facets, fprev, fnext, pairs, blk, p1, p1, 1.0,
                     np.zeros(1, dtype=np.int64), np.zeros((1, 2), dtype=np.int64), p1, p1,
                     np.zeros((1, 2)), 0.5, 0.4, np.zeros((1, N_ACC)), np.zeros(1),
-                    np.zeros(N_WORK))
+                    np.zeros(N_WORK), zones)
     z = np.zeros((1, 2))
     facet_facet_tangent(X, u, u.copy(), facets, fprev, fnext, pairs, p1, p1, p1, p1, 1.0, z,
                         z.copy(), 1e-6, p1, np.zeros(8), np.zeros(N_WORK),

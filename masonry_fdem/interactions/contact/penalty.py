@@ -225,6 +225,7 @@ class BlockContact(Interaction):
         self.counted = np.zeros(0)
         self.fp = np.zeros((0, 8))
         self.fdp = np.zeros((0, 8))
+        self._zones = np.zeros((0, 2, K.N_WORK))
         self._gnodes = np.zeros(0, dtype=np.int64)
         self._gptr = np.zeros(1, dtype=np.int64)
         self._gidx = np.zeros(0, dtype=np.int64)
@@ -442,8 +443,8 @@ class BlockContact(Interaction):
         m = self.model
         n = m.n_nodes
         mask, _ = m.prescribed_arrays(0.0)
-        held = np.zeros(m.blocks.n_blocks)
-        np.add.at(held, m.node_block, mask[0 : 2 * n : 2] + mask[1 : 2 * n : 2])
+        held = np.bincount(m.node_block, weights=mask[0 : 2 * n : 2] + mask[1 : 2 * n : 2],
+                           minlength=m.blocks.n_blocks).astype(float)
         held = self.comm.allreduce(held)
         moving = (held == 0) & (self.block_mass > 0)
         self.inv_mass = np.where(moving, 1.0 / self._mass_safe[:, 0], 0.0)
@@ -560,6 +561,7 @@ class BlockContact(Interaction):
         # the pairs' forces on their nodes, and the lists that sum them into this rank's
         self.fp = np.zeros((self.pairs.shape[0], 8))
         self.fdp = np.zeros((self.pairs.shape[0], 8))
+        self._zones = np.zeros((self.pairs.shape[0], 2, K.N_WORK))
         self._gnodes, self._gptr, self._gidx = node_lists(
             np.c_[self.facets[self.pairs[:, 0]], self.facets[self.pairs[:, 1]]],
             self.n_local_nodes)
@@ -630,12 +632,14 @@ class BlockContact(Interaction):
                 self.X, self.u, self.facets, self.fprev, self.fnext, self.pairs,
                 self.facet_block, self.eps_n, self.depth, self.model.width, self.slot,
                 self.slot_block, self.inv_mass, self.inv_inertia, self.centroid,
-                self.zeta[0], self.zeta[1], self._acc, self.cdamp, self._work)
+                self.zeta[0], self.zeta[1], self._acc, self.cdamp, self._work, self._zones)
             cdamp = self.cdamp
+        # the dampers' kernel found every pass's zone at these positions: reused
         K.facet_facet_forces(
             self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
             self.eps_n, self.eps_t, self.mu, cdamp, self.depth, self.model.width, dt,
             self.tau, self.counted, self.fp, self.fdp, self.energy, self._work,
+            self._zones, live,
         )
         nloc = 2 * self.n_local_nodes
         gather_rows(self.fp, self._gnodes, self._gptr, self._gidx, f)
