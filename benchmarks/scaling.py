@@ -5,9 +5,13 @@ full step.
 Model: a running-bond brick wall (215 x 65 mm bricks, 102.5 mm thick) on a fixed base,
 its lower half laid in mortar (cohesive joints), its upper half dry (frictional contact
 between every brick), stitched by vertical steel anchors through the mortared half; its
-top courses thrown sideways at 1 m/s, under gravity. The defaults give about 100 000
-boundary facets (every brick two triangles: 4 facets each); ``--mesh-size`` refines the
-bricks for more elements per facet.
+top courses thrown sideways at 1 m/s, under gravity. Two presets: ``facets`` (the
+default), 160 x 160 bricks of two triangles each (4 facets a brick), about 100 000
+boundary facets and 51 000 elements: the contact phase at the size of the paper's
+Figure 5; ``elements``, 30 x 30 bricks meshed at 20 mm (about 113 triangles a brick,
+as bricks that may crack are meshed; the base block too), about 100 000 elements and
+28 000 facets: the full step at 100 000 elements. ``--courses``, ``--bricks`` and
+``--mesh-size`` override a preset.
 
 In one ``mpirun -n P`` run the model is built and stepped twice, from the same start:
 first on rank 0 alone (COMM_SELF; the other ranks wait), then on all P ranks. For each
@@ -27,7 +31,7 @@ and the full step in nanoseconds per element-step. At the end the positions of e
 node after the run on one rank and on P ranks are compared (they should be equal to the
 bit: forces are summed in one global order).
 
-Run: ``mpirun -n 2 python benchmarks/scaling.py [--courses 160 --bricks 160 --steps 600]``.
+Run: ``mpirun -n 2 python benchmarks/scaling.py [--preset facets|elements] [--steps 600]``.
 """
 
 from __future__ import annotations
@@ -99,6 +103,12 @@ class Timers:
         setattr(obj, method, timed)
 
 
+#: the two models: ~100 000 boundary facets (every brick two triangles: the contact
+#: phase at the paper's Figure 5 size) and ~100 000 elements (bricks meshed at 20 mm,
+#: ~113 triangles each, as a model whose bricks may crack is meshed: the full step)
+PRESETS = {"facets": dict(courses=160, bricks=160, mesh_size=None),
+           "elements": dict(courses=30, bricks=30, mesh_size=0.02)}
+
 PHASES = ("contact search", "contact halo", "contact kernels", "joints", "anchors",
           "elements", "rest", "full step")
 
@@ -157,15 +167,24 @@ def measure(args, comm):
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--courses", type=int, default=160)
-    ap.add_argument("--bricks", type=int, default=160, help="bricks per course")
+    ap.add_argument("--preset", choices=sorted(PRESETS), default="facets",
+                    help="facets: 160 x 160 bricks of two triangles (~100 000 boundary "
+                         "facets, the contact scaling); elements: 30 x 30 bricks meshed "
+                         "at 20 mm (~100 000 elements, the full step)")
+    ap.add_argument("--courses", type=int, default=None, help="(default: the preset's)")
+    ap.add_argument("--bricks", type=int, default=None,
+                    help="bricks per course (default: the preset's)")
     ap.add_argument("--mesh-size", type=float, default=None,
-                    help="element size [m]; default: two triangles per brick")
+                    help="element size [m] (default: the preset's; none: two triangles "
+                         "per brick)")
     ap.add_argument("--steps", type=int, default=600, help="timed steps per run")
     ap.add_argument("--chunk", type=int, default=50, help="steps per timing sample")
     ap.add_argument("--rebuild-every", type=int, default=20)
     ap.add_argument("--anchor-spacing", type=float, default=2.0, help="[m]")
     args = ap.parse_args()
+    for k, v in PRESETS[args.preset].items():
+        if getattr(args, k) is None:
+            setattr(args, k, v)
     world = MPI.COMM_WORLD
     size = world.size
     res = {}
