@@ -188,7 +188,8 @@ def self_pairs(boxes: np.ndarray, group: np.ndarray | None = None) -> np.ndarray
     tree = build_adt(boxes)
     n = tree.item.size
     g = _check_group(group, n)
-    pi, pj = _grow(K.adt_self, max(16, 8 * n), tree.node_box, tree.item, tree.left, tree.right,
+    kernel = K.adt_self_2d if tree.node_box.shape[1] == 4 else K.adt_self
+    pi, pj = _grow(kernel, max(16, 8 * n), tree.node_box, tree.item, tree.left, tree.right,
                    tree.up, tree.sub, tree.depth, g)
     out = np.empty((pi.size, 2), dtype=np.int64)
     K.sort_pairs(pi, pj, np.empty(n + 1, dtype=np.int64), np.empty(n, dtype=np.int64), out)
