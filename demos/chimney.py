@@ -231,7 +231,7 @@ def build(ch: Chimney, comm=MPI.COMM_WORLD, *, restitution=0.2, friction=0.6,
     model.add_gravity()
     contact = BlockContact(model, ContactSettings(friction=friction, restitution=restitution,
                                                   penalty_factor=penalty_factor,
-                                                  margin=0.1, rebuild_every=20))
+                                                  margin=0.1, rebuild_every=200))
     joints = Joints(model, laws, cracks={"brickwork": CRACK}, where=rules, contact=contact)
     out["top"] = notched.select(f"unit:{ch.courses - 1}:*")
     model.monitor("top", (0.0, ch.height), blocks=out["top"])
