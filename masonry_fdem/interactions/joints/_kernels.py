@@ -355,33 +355,19 @@ def interface_law(p, dn, ds, s0, s1):
 
 
 @njit(cache=True, inline="always")
-def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
-    """Forces of one integration point: the single source of forces and tangent.
-
-    Args:
-        X, u: reference coordinates (n, 2) [m] and displacements (2n,) [m].
-        a0, a1, b0, b1: the end nodes of its facets on side A and side B.
-        ga, gb: its position along each facet (0 at the first node).
-        wq: its weight [m²].
-        p: (N_PROPS,) its material properties.
-        s0q, s1q: (N_STATE,) its committed state (read) and trial state (written).
-        fl: (8,) its forces [N] on (a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y) (written).
-    """
-    # joint frame from the current facets (B reversed): t along A, n out of A
+def _frame(X, u, a0, a1, b0, b1):
+    """The joint's tangent, unnormalised, and its length [m]: from the current facets,
+    A's and B's reversed added (the two points of a segment share it)."""
     tx = (X[a1, 0] + u[2 * a1] - X[a0, 0] - u[2 * a0]) + (
         X[b0, 0] + u[2 * b0] - X[b1, 0] - u[2 * b1])
     ty = (X[a1, 1] + u[2 * a1 + 1] - X[a0, 1] - u[2 * a0 + 1]) + (
         X[b0, 1] + u[2 * b0 + 1] - X[b1, 1] - u[2 * b1 + 1])
-    ln = math.sqrt(tx * tx + ty * ty)
-    if not ln > 0.0:
-        # the two facets turned into opposite directions (or collapsed): no frame. Only
-        # a wild Newton iterate gets here; NaN forces make its residual reject it
-        for k in range(8):
-            fl[k] = math.nan
-        s1q[:] = s0q
-        return
-    tx /= ln
-    ty /= ln
+    return tx, ty, math.sqrt(tx * tx + ty * ty)
+
+
+@njit(cache=True, inline="always")
+def _framed_point(u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl, tx, ty):
+    """:func:`point_forces` in the unit tangent (tx, ty) of its joint's frame."""
     nx = ty
     ny = -tx
     dux = ((1.0 - gb) * u[2 * b0] + gb * u[2 * b1]) - ((1.0 - ga) * u[2 * a0] + ga * u[2 * a1])
@@ -403,6 +389,31 @@ def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
     fl[5] = -((1.0 - gb) * fy)
     fl[6] = -(gb * fx)
     fl[7] = -(gb * fy)
+
+
+@njit(cache=True, inline="always")
+def point_forces(X, u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl):
+    """Forces of one integration point: the single source of forces and tangent.
+
+    Args:
+        X, u: reference coordinates (n, 2) [m] and displacements (2n,) [m].
+        a0, a1, b0, b1: the end nodes of its facets on side A and side B.
+        ga, gb: its position along each facet (0 at the first node).
+        wq: its weight [m²].
+        p: (N_PROPS,) its material properties.
+        s0q, s1q: (N_STATE,) its committed state (read) and trial state (written).
+        fl: (8,) its forces [N] on (a0x, a0y, a1x, a1y, b0x, b0y, b1x, b1y) (written).
+    """
+    # joint frame from the current facets (B reversed): t along A, n out of A
+    tx, ty, ln = _frame(X, u, a0, a1, b0, b1)
+    if not ln > 0.0:
+        # the two facets turned into opposite directions (or collapsed): no frame. Only
+        # a wild Newton iterate gets here; NaN forces make its residual reject it
+        for k in range(8):
+            fl[k] = math.nan
+        s1q[:] = s0q
+        return
+    _framed_point(u, a0, a1, b0, b1, ga, gb, wq, p, s0q, s1q, fl, tx / ln, ty / ln)
 
 
 @njit(cache=True)
@@ -429,6 +440,11 @@ def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, counted, s0, 
     """
     e_el = 0.0
     e_dis = 0.0
+    # the frame of the last live point, reused by the next point on the same facets (the
+    # other point of its segment): the same numbers as point_forces computes
+    tx = 0.0
+    ty = 0.0
+    framed = -1
     for q in range(ipa.shape[0]):
         if alive[q] == 0:
             for j in range(8):
@@ -440,7 +456,22 @@ def joint_forces(X, u, ipa, ipb, xia, xib, w, ipmat, props, alive, counted, s0, 
         a1 = ipa[q, 1]
         b0 = ipb[q, 0]
         b1 = ipb[q, 1]
-        point_forces(X, u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q], fq[q])
+        if (framed >= 0 and ipa[framed, 0] == a0 and ipa[framed, 1] == a1
+                and ipb[framed, 0] == b0 and ipb[framed, 1] == b1):
+            _framed_point(u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q], fq[q],
+                          tx, ty)
+        else:
+            fx, fy, ln = _frame(X, u, a0, a1, b0, b1)
+            if ln > 0.0:
+                tx = fx / ln
+                ty = fy / ln
+                framed = q
+                _framed_point(u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q],
+                              fq[q], tx, ty)
+            else:
+                framed = -1
+                point_forces(X, u, a0, a1, b0, b1, xia[q], xib[q], w[q], p, s0[q], s1[q],
+                             fq[q])
         sn = s1[q, S_SN]
         ts = s1[q, S_TS]
         e_el += counted[q] * 0.5 * w[q] * (sn * sn / p[P_KN] + ts * ts / p[P_KS])
