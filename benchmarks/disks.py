@@ -1,5 +1,6 @@
 """Disk throughput: disk-steps per second of :class:`masonry_fdem.interactions.disks.Disks` against
-LAMMPS ``gran/hooke/history`` on the same dense 2D packing, in the same run.
+LAMMPS ``gran/hertz/history`` (or ``gran/hooke/history``, ``--law hooke``) on the same dense
+2D packing, in the same run.
 
 Configuration (one per size N = 1e4, 1e5, 1e6): a square patch of a hexagonal lattice of
 disks of radius r0 (1 ± 1 %, uniform; r0 = 1 cm), lattice spacing 2 r0 (1 − 0.2 %),
@@ -38,13 +39,17 @@ N · steps / time. Two modes each:
   the cell list, the sorted pair list and the carried history are rebuilt); LAMMPS
   ``neigh_modify delay 0 every 1 check no``.
 
-Laws differ: ours is Hertz (F = K δ^{3/2}) with hysteretic restitution and a Mindlin
-tangential spring, LAMMPS ``gran/hooke/history`` is linear (F = k_n δ) with a viscous
-normal/tangential dashpot and a tangential history spring. k_n is the Hertz secant
-stiffness at the median initial overlap, so the overlaps are alike, k_t/k_n is our
-Mindlin ratio, and the dashpot gives the same restitution for a pair of r0 disks. The
-neighbour structure (same candidate-pair rule, same contacts) and the per-contact work
-(one square root, a history spring, a Coulomb cap) are alike, so the throughput ratio is
+Laws. Ours is Hertz (F = K δ^{3/2}) with hysteretic restitution and a Mindlin tangential
+spring (k_t ∝ √δ). The default LAMMPS counterpart, ``gran/hertz/history``, is the same
+Hertz law (F_n = k_n δ √(δ R*), with k_n = K/√R*: exact for two r0 disks) with a
+tangential history spring that stiffens as √(δ R*) (k_t set to our Mindlin tangent), and
+a viscous normal/tangential dashpot (scaled alike) for our restitution at the median
+overlap, in place of our hysteresis. ``--law hooke`` takes ``gran/hooke/history``
+instead, linear (F = k_n δ) with k_n the Hertz secant stiffness at the median initial
+overlap, so the overlaps are alike (the figures of earlier sessions; LAMMPS is ~8 %
+faster with it: one square root less). The neighbour structure (same candidate-pair
+rule, same contacts) and the per-contact work (square roots, a history spring, a
+Coulomb cap) are alike, so the throughput ratio is
 meaningful; the table prints candidate pairs, contacts per disk and pair-list rebuilds of
 both codes as a sanity check of "same configuration". Both codes run serially (one
 process, one thread). Each figure is the median of ``--repeats`` runs (default 3 below
