@@ -275,12 +275,9 @@ def _pass_points(X, u, facets, fs, fm):
 def _pass_zone(X, u, facets, fprev, fnext, fs, fm, depth, work):
     """Zone of slave facet fs on master facet fm; returns the four facet end points
     relative to the reference position of the master's first node."""
+    q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_points(X, u, facets, fs, fm)
     ox = X[facets[fm, 0], 0]
     oy = X[facets[fm, 0], 1]
-    q1x, q1y = _pos(X, u, facets[fs, 0], ox, oy)
-    q2x, q2y = _pos(X, u, facets[fs, 1], ox, oy)
-    p1x, p1y = _pos(X, u, facets[fm, 0], ox, oy)
-    p2x, p2y = _pos(X, u, facets[fm, 1], ox, oy)
     p0x, p0y = _pos(X, u, facets[fprev[fm], 0], ox, oy)
     p3x, p3y = _pos(X, u, facets[fnext[fm], 1], ox, oy)
     _zone(q1x, q1y, q2x, q2y, p0x, p0y, p1x, p1y, p2x, p2y, p3x, p3y, depth, work)
@@ -870,8 +867,10 @@ def block_moments(X, u, mass, bptr, bnodes, out):
 
 @njit(cache=True)
 def nodal_midpoint_work(f, nodes, u_new, u_old):
-    """:func:`midpoint_work` over the x and y dofs of ``nodes`` only (ascending: the same
-    sum, to the bit, as over every dof when f is zero elsewhere) [J]."""
+    """Σ f_i (u_new,i − u_old,i)/2 [J] over the x and y dofs of ``nodes`` (ascending: the
+    same sum, to the bit, as over every dof when f is zero elsewhere): the work of the
+    forces f [N] of a step over its midpoint displacement increment, (u(n+1) − u(n−1))/2
+    = (v(n−½) + v(n+½)) dt/2, as the explicit solver counts every force's work."""
     w = 0.0
     for n in nodes:
         w += f[2 * n] * (u_new[2 * n] - u_old[2 * n])
@@ -891,17 +890,6 @@ def keep_damper_terms(fd, nodes_old, nodes, u_now, v, dt, u1, u2):
             d = 2 * n + c
             u1[d] = u_now[d]
             u2[d] = u_now[d] - dt * v[d]
-
-
-@njit(cache=True)
-def midpoint_work(f, u_new, u_old):
-    """Σ f_i (u_new,i − u_old,i)/2 [J]: the work of the forces f [N] of a step over its
-    midpoint displacement increment, (u(n+1) − u(n−1))/2 = (v(n−½) + v(n+½)) dt/2, as
-    the explicit solver counts every force's work."""
-    w = 0.0
-    for i in range(f.size):
-        w += f[i] * (u_new[i] - u_old[i])
-    return 0.5 * w
 
 
 @njit(cache=True)
@@ -1023,7 +1011,6 @@ def precompile() -> None:
                         z.copy(), 1e-6, p1, np.zeros(8), np.zeros(N_WORK),
                         np.zeros(128, dtype=np.int64), np.zeros(128, dtype=np.int64),
                         np.zeros(128))
-    midpoint_work(u, u, u)
     nodes = np.arange(4, dtype=np.int64)
     nodal_midpoint_work(u, nodes, u, u)
     keep_damper_terms(u.copy(), nodes, nodes, u, u, 1e-6, u.copy(), u.copy())
