@@ -173,3 +173,43 @@ def test_inflate_and_errors():
         self_pairs(np.zeros((3, 4)), np.zeros(2))
     with pytest.raises(ValueError, match="columns"):
         query_adt(build_adt(np.zeros((3, 4))), np.zeros((1, 6)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_cell_grid_flags_every_box_that_meets(seed):
+    """The coarse grid the ranks pick their ghost facets with: a box of one set that meets
+    (closed) a box of the other is always flagged, however the boxes straddle, touch or
+    cover the cells (long thin boxes included); boxes far from all are not."""
+    from masonry_fdem.interactions.search._kernels import boxes_on_cells, mark_cells
+
+    rng = np.random.default_rng(seed)
+
+    def boxes(n):
+        lo = rng.uniform(0.0, 10.0, (n, 2))
+        size = rng.exponential(0.2, (n, 2))
+        size[: n // 10, 0] = rng.uniform(2.0, 8.0, n // 10)  # long, thin
+        b = np.c_[lo, lo + size]
+        b[n // 10 : n // 5, 2:] = b[n // 10 : n // 5, :2]  # points
+        return b
+
+    a, b = boxes(300), boxes(400)
+    b[300:, [0, 2]] += 12.0  # a region of b's own
+    b[:20, :2] = a[:20, 2:]  # corners touching exactly
+    b[:20, 2:] = b[:20, :2] + 0.1
+    lo = np.minimum(a[:, :2].min(axis=0), b[:, :2].min(axis=0))
+    hi = np.maximum(a[:, 2:].max(axis=0), b[:, 2:].max(axis=0))
+    h = 0.37
+    gx, gy = (int(np.ceil(e / h)) for e in hi - lo)
+    occ = np.zeros((gy, gx), dtype=np.uint8)
+    mark_cells(a, a.shape[0], lo, 1.0 / h, gx, gy, 0.0, occ)
+    flag = np.zeros(b.shape[0], dtype=np.bool_)
+    boxes_on_cells(b, b.shape[0], lo, 1.0 / h, gx, gy, occ, flag)
+    meets = ((b[:, None, :2] <= a[None, :, 2:]) & (a[None, :, :2] <= b[:, None, 2:])).all(
+        axis=2).any(axis=1)
+    assert meets[:20].all()
+    assert flag[meets].all()
+    # far boxes: more than a cell's diagonal from every box of a are never flagged
+    gap = np.maximum(np.maximum(a[None, :, :2] - b[:, None, 2:],
+                                b[:, None, :2] - a[None, :, 2:]), 0.0)
+    far = np.sqrt((gap ** 2).sum(axis=2)).min(axis=1) > 2.0 * np.sqrt(2.0) * h
+    assert far.any() and not flag[far].any()

@@ -120,3 +120,39 @@ def test_joints_and_contact_bitwise_same_on_any_rank_count():
     assert cw == cs and cw["open"] + cw["softening"] > 0
     assert np.array_equal(uw, us)
     assert kw == pytest.approx(ks, rel=1e-12)
+
+
+def _wall_on_base(comm):
+    """A dry running-bond wall (24 courses of 24 bricks) on a base block under its whole
+    length: the rank holding the base spans the model."""
+    from masonry_fdem.geometry import wall_layout
+    from masonry_fdem.interactions import BlockContact, ContactSettings
+
+    wall = wall_layout(courses=24, bricks_per_course=24, brick_length=0.215,
+                       brick_height=0.065, joint=0.0)
+    base = rectangle(-0.3, -0.2, 24 * 0.215 + 0.3, 0.0)
+    blocks = mesh_blocks([base, *wall.polygons], materials=["stone", *wall.materials],
+                         names=["base", *wall.names], comm=comm)
+    model = Model(blocks, MATS, width=0.1025, comm=comm)
+    model.fix_blocks("base")
+    contact = BlockContact(model, ContactSettings(friction=0.6))
+    contact.rebuild()
+    return model, contact
+
+
+def test_ghost_facets_follow_the_facets_not_the_ranks_box():
+    """Each rank takes as ghosts only the other ranks' facets near its own (a coarse grid
+    of cells, not its bounding box, which the base under the wall stretches over the whole
+    model), and the pairs found on all ranks are those found on one."""
+    comm = MPI.COMM_WORLD
+    model, contact = _wall_on_base(comm)
+    _, serial = _wall_on_base(MPI.COMM_SELF)
+    mine = contact.keys[contact.counted > 0]
+    keys = np.sort(np.concatenate(comm.allgather(mine)))
+    assert np.array_equal(keys, serial.keys)
+    ghosts = contact.n_candidates - contact.local_gid.size
+    others = serial.local_gid.size - contact.local_gid.size
+    print(f"\nrank {comm.rank}: {ghosts} ghost facets of {others} on the other ranks, "
+          f"{keys.size} pairs as on one rank")
+    if comm.size > 1:
+        assert 0 < ghosts <= 0.3 * others

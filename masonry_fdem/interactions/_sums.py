@@ -34,22 +34,43 @@ def gather_rows(fq, nodes, ptr, idx, f):
         f[2 * n + 1] += sy
 
 
+@njit(cache=True)
+def _count_sort(nodes, n_nodes, touched, ptr, idx):
+    """Counting sort of the rows r (ascending) by ``nodes[r]`` < n_nodes (stable: a
+    node's rows stay in term order); returns the number of touched nodes."""
+    counts = np.zeros(n_nodes + 1, dtype=np.int64)
+    for r in range(nodes.size):
+        n = nodes[r]
+        if n < n_nodes:
+            counts[n + 1] += 1
+    nt = 0
+    for n in range(n_nodes):
+        if counts[n + 1] > 0:
+            touched[nt] = n
+            ptr[nt + 1] = ptr[nt] + counts[n + 1]
+            nt += 1
+        counts[n + 1] += counts[n]  # counts[n] becomes the start of node n
+    for r in range(nodes.size):
+        n = nodes[r]
+        if n < n_nodes:
+            idx[counts[n]] = r
+            counts[n] += 1
+    return nt
+
+
 def node_lists(nodes: np.ndarray, n_nodes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """CSR lists of the rows 4 k + slot of the terms acting on each of the first
     ``n_nodes`` (owned) nodes that has any, in term order: (the nodes, ptr, idx), ptr
     one longer than the nodes; ``nodes`` (n_terms, 4) are the local node numbers of
     each term (ghosts ≥ n_nodes are left out). Nodes without terms are not listed, so
     a sum costs the nodes the interaction touches, not the model's."""
-    nodes = np.asarray(nodes, dtype=np.int64).reshape(-1)
-    rows = np.arange(nodes.size, dtype=np.int64)
-    mine = nodes < n_nodes
-    nodes, rows = nodes[mine], rows[mine]
-    order = np.lexsort((rows, nodes))
-    counts = np.bincount(nodes, minlength=n_nodes)
-    touched = np.flatnonzero(counts).astype(np.int64)
-    ptr = np.zeros(touched.size + 1, dtype=np.int64)
-    np.cumsum(counts[touched], out=ptr[1:])
-    return touched, ptr, np.ascontiguousarray(rows[order], dtype=np.int64)
+    nodes = np.ascontiguousarray(nodes, dtype=np.int64).reshape(-1)
+    n_nodes = int(n_nodes)
+    touched = np.empty(n_nodes, dtype=np.int64)
+    ptr = np.zeros(n_nodes + 1, dtype=np.int64)
+    idx = np.empty(int(np.count_nonzero(nodes < n_nodes)), dtype=np.int64)
+    nt = _count_sort(nodes, n_nodes, touched, ptr, idx)
+    return touched[:nt].copy(), ptr[: nt + 1].copy(), idx
 
 
 def precompile() -> None:

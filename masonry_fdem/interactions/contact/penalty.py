@@ -32,6 +32,7 @@ from masonry_fdem.interactions._sums import gather_rows, node_lists
 from masonry_fdem.interactions.contact import _kernels as K
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
 from masonry_fdem.interactions.search import facet_boxes, max_speed, self_pairs
+from masonry_fdem.interactions.search._kernels import boxes_on_cells, mark_cells
 from masonry_fdem.parallel import exchange_ids
 
 __all__ = ["ContactSettings", "BlockContact", "restitution_damping_ratio",
@@ -323,6 +324,39 @@ class BlockContact(Interaction):
             self._uv = np.zeros((nloc, 4))
             self._ghost_uv = np.zeros((self.exchange.n_ghost, 4))
 
+    def _ghosts_for(self, nl: int, half: float) -> list[np.ndarray]:
+        """The local facets each rank needs as ghosts (collective): those whose boxes
+        (the first ``nl`` rows of ``self.boxes``, grown by the half margin ``half`` [m])
+        overlap a cell of a coarse grid over the model that a box of that rank, grown by
+        another half margin, overlaps. Two boxes that meet share a cell, so no pair is
+        missed; unlike one bounding box per rank, a rank holding a long block (a base
+        under the whole wall) does not take every facet of the others as ghosts."""
+        comm = self.comm
+        b = self.boxes[:nl]
+        lo = np.array([b[:, 0].min(), b[:, 1].min()]) if nl else np.full(2, np.inf)
+        hi = np.array([b[:, 2].max(), b[:, 3].max()]) if nl else np.full(2, -np.inf)
+        lo = lo - half
+        hi = hi + half
+        comm.Allreduce(MPI.IN_PLACE, lo, op=MPI.MIN)
+        comm.Allreduce(MPI.IN_PLACE, hi, op=MPI.MAX)
+        ext = np.maximum(hi - lo, 0.0)
+        # about four facets a cell, at most 2**20 cells
+        cells = min(max(self.g_facets.shape[0] // 4, 64), 1 << 20)
+        h = max(math.sqrt(ext[0] * ext[1] / cells), (ext[0] + ext[1]) / cells, 1e-12)
+        gx, gy = (int(min(max(math.ceil(e / h), 1), cells)) for e in ext)
+        occ = np.zeros((gy, gx), dtype=np.uint8)
+        mark_cells(self.boxes, nl, lo, 1.0 / h, gx, gy, half, occ)
+        occs = comm.allgather(occ)
+        hit = np.zeros(nl, dtype=np.bool_)
+        send = []
+        for r in range(comm.size):
+            if r == comm.rank or nl == 0:
+                send.append(np.zeros(0, np.int64))
+                continue
+            boxes_on_cells(self.boxes, nl, lo, 1.0 / h, gx, gy, occs[r], hit)
+            send.append(self.local_gid[hit])
+        return send
+
     def _sync(self, v: np.ndarray) -> None:
         """Current displacement and velocity of local and ghost nodes."""
         nloc = 2 * self.n_local_nodes
@@ -485,18 +519,7 @@ class BlockContact(Interaction):
             self._sync(v)
             facet_boxes(self.X, self.u, self.facets, half, self.boxes)
             nl = self.local_gid.size
-            lo = self.boxes[:nl, :2].min(axis=0) if nl else np.full(2, np.inf)
-            hi = self.boxes[:nl, 2:].max(axis=0) if nl else np.full(2, -np.inf)
-            bbs = comm.allgather(np.r_[lo - half, hi + half])
-            send = []
-            for r in range(comm.size):
-                if r == comm.rank or nl == 0:
-                    send.append(np.zeros(0, np.int64))
-                    continue
-                bb = bbs[r]
-                hit = np.all(self.boxes[:nl, :2] <= bb[2:], axis=1) & np.all(
-                    self.boxes[:nl, 2:] >= bb[:2], axis=1)
-                send.append(self.local_gid[hit])
+            send = self._ghosts_for(nl, half)
             received = exchange_ids(comm, send)
             self._build_extended(np.concatenate(received), send)
         self._sync(v)

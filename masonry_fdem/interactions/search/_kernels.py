@@ -528,6 +528,44 @@ def facet_boxes(X, u, facets, margin, boxes):
         boxes[k, 3] = max(ay, by) + margin
 
 
+@njit(cache=True, inline="always")
+def _cell_range(a, b, lo, inv_h, g):
+    """The cells [i0, i1] a coordinate interval [a, b] [m] overlaps on a grid of g cells
+    from lo, clipped to the grid (closed: a point on a cell edge is in both cells)."""
+    i0 = int(math.floor((a - lo) * inv_h))
+    i1 = int(math.floor((b - lo) * inv_h))
+    return max(i0, 0), min(i1, g - 1)
+
+
+@njit(cache=True)
+def mark_cells(boxes, n, lo, inv_h, gx, gy, grow, occ):
+    """occ[j, i] = 1 for every cell of a (gy, gx) grid from ``lo`` (cell size 1/inv_h [m])
+    that the first n boxes, grown by ``grow`` [m] on every side, overlap."""
+    for k in range(n):
+        i0, i1 = _cell_range(boxes[k, 0] - grow, boxes[k, 2] + grow, lo[0], inv_h, gx)
+        j0, j1 = _cell_range(boxes[k, 1] - grow, boxes[k, 3] + grow, lo[1], inv_h, gy)
+        for j in range(j0, j1 + 1):
+            for i in range(i0, i1 + 1):
+                occ[j, i] = 1
+
+
+@njit(cache=True)
+def boxes_on_cells(boxes, n, lo, inv_h, gx, gy, occ, out):
+    """out[k] = True when box k (of the first n) overlaps a marked cell of ``occ``."""
+    for k in range(n):
+        i0, i1 = _cell_range(boxes[k, 0], boxes[k, 2], lo[0], inv_h, gx)
+        j0, j1 = _cell_range(boxes[k, 1], boxes[k, 3], lo[1], inv_h, gy)
+        hit = False
+        for j in range(j0, j1 + 1):
+            for i in range(i0, i1 + 1):
+                if occ[j, i]:
+                    hit = True
+                    break
+            if hit:
+                break
+        out[k] = hit
+
+
 @njit(cache=True)
 def max_speed(v):
     """Largest nodal speed [m/s] of a flat (2 n,) velocity array."""
@@ -545,3 +583,8 @@ def precompile() -> None:
     facets = np.array([[0, 1], [1, 2], [2, 3], [3, 0]], dtype=np.int64)
     facet_boxes(X, np.zeros(8), facets, 0.1, np.zeros((4, 4)))
     max_speed(np.zeros(8))
+    occ = np.zeros((2, 2), dtype=np.uint8)
+    lo = np.zeros(2)
+    mark_cells(np.array([[0.0, 0.0, 0.5, 0.5]]), 1, lo, 1.0, 2, 2, 0.1, occ)
+    boxes_on_cells(np.array([[0.0, 0.0, 0.5, 0.5]]), 1, lo, 1.0, 2, 2, occ,
+                   np.zeros(1, dtype=np.bool_))
