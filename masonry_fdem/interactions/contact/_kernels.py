@@ -360,7 +360,7 @@ def _end_force(coef, se, cx, cy, vertex, q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y,
 
 @njit(cache=True)
 def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
-                 width, dt, tau, f, fdamp, work, stick):
+                 width, dt, tau, tforce, f, fdamp, work, stick):
     """Forces of candidate pair ``k`` on its four nodes added into ``f`` (8,), their
     dampers' part also into ``fdamp`` (8,): x, y on the nodes of facet ``pairs[k, 0]``
     (first, second), then on those of ``pairs[k, 1]`` (see :func:`facet_facet_forces`).
@@ -374,16 +374,25 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
     # cheap rejection: facets whose boxes are further apart than the largest
     # penetration considered cannot be in contact
     if _far_apart(X, u, facets, pairs[k, 0], pairs[k, 1], depth[k]):
-        tau[k, 0] = 0.0
-        tau[k, 1] = 0.0
-        return 0.0, 0.0, 0.0, 0.0, False, -1.0
+        d_f = _release(k, 0, tau, tforce, eps_t) + _release(k, 1, tau, tforce, eps_t)
+        return 0.0, 0.0, d_f, 0.0, False, -1.0
     return _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp,
-                        depth, width, dt, tau, f, fdamp, work, stick, work, False)
+                        depth, width, dt, tau, tforce, f, fdamp, work, stick, work, False)
+
+
+@njit(cache=True, inline="always")
+def _release(k, p, tau, tforce, eps_t):
+    """Pass p of pair k separated: its tangential spring lets go (history zeroed); the
+    energy it held, F t / (2 ε_t) [J], is returned, to be counted as dissipated."""
+    e = 0.5 * tforce[k, p] * tau[k, p] / eps_t[k]
+    tau[k, p] = 0.0
+    tforce[k, p] = 0.0
+    return e
 
 
 @njit(cache=True, inline="always")
 def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
-                 width, dt, tau, f, fdamp, work, stick, zones, use_zones):
+                 width, dt, tau, tforce, f, fdamp, work, stick, zones, use_zones):
     """:func:`_pair_forces` of a pair that the box test did not reject: its two passes.
 
     Inlined (as are the small functions it calls) into the loops over pairs, which test
@@ -411,7 +420,7 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         mb = 4 - sb
         if use_zones:
             if zones[k, p, Z_ACTIVE] == 0.0:  # separated
-                tau[k, p] = 0.0
+                d_f += _release(k, p, tau, tforce, eps_t)
                 continue
             q1x, q1y, q2x, q2y, p1x, p1y, p2x, p2y = _pass_points(X, u, facets, fs, fm)
             for c in range(N_WORK):
@@ -421,7 +430,7 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
                 X, u, facets, fprev, fnext, fs, fm, depth[k], work
             )
         if work[Z_ACTIVE] == 0.0:  # separated
-            tau[k, p] = 0.0
+            d_f += _release(k, p, tau, tforce, eps_t)
             continue
         active = True
         s0 = work[Z_S0]
@@ -496,16 +505,27 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
             - (1.0 - xic) * v[2 * m1n + 1] - xic * v[2 * m2n + 1]) * ty
         # --- friction: elastic predictor, Coulomb return on the mean normal traction
         # (spring and damper, clipped)
-        t_trial = tau[k, p] + eps_t[k] * vt * dt
+        t_old = tau[k, p]
+        t_trial = t_old + eps_t[k] * vt * dt
         t_max = mu[k] * pbar
         apex = max(apex, work[Z_PEN])
         if abs(t_trial) > t_max and not stick:
             t_new = t_max if t_trial > 0.0 else -t_max
-            d_f += t_max * (abs(t_trial) - t_max) / eps_t[k] * zlen * width * half
         else:
             t_new = t_trial
         tau[k, p] = t_new
-        e_t += 0.5 * t_new * t_new / eps_t[k] * zlen * width * half
+        # the friction force [N] and its dissipation in the step: the work it did over
+        # the slip increment vt dt at the mean of its old and new values (as central
+        # difference counts the work of a force) less the change of the tangential
+        # spring's energy F t / (2 ε_t) — Itasca's slip energy; exact for the scheme
+        # whatever the zone's area does (a zone that grows or shrinks under a held
+        # traction changes the spring's energy: a return on t alone missed that)
+        f_new = t_new * zlen * width * half
+        f_old = tforce[k, p]
+        d_f += (0.5 * vt * dt * (f_new + f_old)
+                - 0.5 * (f_new * t_new - f_old * t_old) / eps_t[k])
+        tforce[k, p] = f_new
+        e_t += 0.5 * f_new * t_new / eps_t[k]
         e_n += pot
         # friction traction, uniform over the zone, opposes the slave's slip
         a = zlen * width * half * t_new
@@ -573,7 +593,8 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
 
 @njit(cache=True)
 def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdamp, depth,
-                       width, dt, tau, counted, fp, fdp, energy, work, zones, use_zones):
+                       width, dt, tau, tforce, counted, fp, fdp, energy, work, zones,
+                       use_zones):
     """Penalty normal, viscous normal and Coulomb friction forces of all candidate pairs,
     pair by pair (summed into the nodes by :func:`masonry_fdem.interactions._sums.gather_rows`,
     in an order that does not depend on how the blocks are spread over ranks).
@@ -586,6 +607,8 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
         width: out-of-plane width [m].
         dt: time step [s] (tangential slip increment = relative velocity · dt).
         tau: (n_p, 2) in/out tangential traction history [Pa] of the two passes.
+        tforce: (n_p, 2) in/out the friction force [N] of each pass at the last call (for
+            its dissipation; zero where tau is).
         counted: (n_p,) weight of each pair in ``energy`` (1; 0 for the copy of a pair
             another rank counts).
         fp: (n_p, 8) out: the contact forces of each pair on its four nodes [N], x and y
@@ -608,17 +631,17 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
             fp[k, j] = 0.0
             fdp[k, j] = 0.0
         if use_zones:
-            if zones[k, 0, Z_ACTIVE] == 0.0 and zones[k, 1, Z_ACTIVE] == 0.0:
-                tau[k, 0] = 0.0
-                tau[k, 1] = 0.0
-                continue
-        elif _far_apart(X, u, facets, pairs[k, 0], pairs[k, 1], depth[k]):
-            tau[k, 0] = 0.0  # out of reach (see _pair_forces)
-            tau[k, 1] = 0.0
+            off = zones[k, 0, Z_ACTIVE] == 0.0 and zones[k, 1, Z_ACTIVE] == 0.0
+        else:
+            off = _far_apart(X, u, facets, pairs[k, 0], pairs[k, 1], depth[k])
+        if off:  # separated, or out of reach (see _pair_forces)
+            if tau[k, 0] != 0.0 or tau[k, 1] != 0.0:
+                d_f += counted[k] * (_release(k, 0, tau, tforce, eps_t)
+                                     + _release(k, 1, tau, tforce, eps_t))
             continue
         a, b, c, d, _, _ = _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n,
-                                        eps_t, mu, cdamp, depth, width, dt, tau, fp[k],
-                                        fdp[k], work, False, zones, use_zones)
+                                        eps_t, mu, cdamp, depth, width, dt, tau, tforce,
+                                        fp[k], fdp[k], work, False, zones, use_zones)
         w = counted[k]
         e_n += w * a
         e_t += w * b
@@ -778,6 +801,7 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
     nodes = np.empty(8, dtype=np.int64)
     fp = np.empty(8)
     nodamp = np.zeros(pairs.shape[0])
+    tforce = np.zeros(tau.shape)  # scratch: the tangent does not count dissipation
     nent = 0
     for k in range(pairs.shape[0]):
         if counted[k] <= 0.0:
@@ -788,7 +812,7 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
         tau[k, 1] = tau_c[k, 1]
         _, _, _, _, active, apex = _pair_forces(k, X, u, v, facets, fprev, fnext, pairs,
                                                 eps_n, eps_t, mu, nodamp, depth, width, 1.0,
-                                                tau, fbuf, fbuf, work, False)
+                                                tau, tforce, fbuf, fbuf, work, False)
         fa = pairs[k, 0]
         fb = pairs[k, 1]
         nodes[0] = facets[fa, 0]
@@ -826,8 +850,8 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
                         tau[k, 1] = tau_c[k, 1]
                         fbuf[:] = 0.0
                         _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t,
-                                     mu, nodamp, depth, width, 1.0, tau, fbuf, fbuf, work,
-                                     stick)
+                                     mu, nodamp, depth, width, 1.0, tau, tforce, fbuf, fbuf,
+                                     work, stick)
                         for i in range(4):
                             for ci in range(2):
                                 if side == 0:
@@ -999,7 +1023,7 @@ def precompile() -> None:
     zones = np.zeros((1, 2, N_WORK))
     for use in (False, True):
         facet_facet_forces(X, u, u, facets, fprev, fnext, pairs, p1, p1, p1, p1, p1, 1.0,
-                           1e-3, np.zeros((1, 2)), p1, fp, fp.copy(), np.zeros(N_ENERGY),
+                           1e-3, np.zeros((1, 2)), np.zeros((1, 2)), p1, fp, fp.copy(), np.zeros(N_ENERGY),
                            np.zeros(N_WORK), zones, use)
     blk = np.zeros(4, dtype=np.int64)
     contact_damping(X, u, facets, fprev, fnext, pairs, blk, p1, p1, 1.0,

@@ -223,6 +223,7 @@ class BlockContact(Interaction):
         self.pairs = np.zeros((0, 2), dtype=np.int64)
         self.tau = np.zeros((0, 2))
         self.tau_c = np.zeros((0, 2))
+        self.tforce = np.zeros((0, 2))
         self.keys = np.zeros(0, dtype=np.int64)
         self.counted = np.zeros(0)
         self.fp = np.zeros((0, 8))
@@ -551,15 +552,15 @@ class BlockContact(Interaction):
         if self.excluded.size and keys.size:
             free = ~np.isin(keys, self.excluded)
             pairs, keys, counted = pairs[free], keys[free], counted[free]
-        hist = [np.zeros((pairs.shape[0], 2)) for _ in range(2)]
+        hist = [np.zeros((pairs.shape[0], 2)) for _ in range(3)]
         # the trial history from the current pairs; the committed one from the last
         # commit's pairs when there was one (the current pair set may come from a
         # rebuild at a failed iterate that lost some of them)
-        sources = [(self.keys, (self.tau,), hist[:1])]
+        sources = [(self.keys, (self.tau, self.tforce), (hist[0], hist[2]))]
         if self._committed is None:
-            sources.append((self.keys, (self.tau_c,), hist[1:]))
+            sources.append((self.keys, (self.tau_c,), hist[1:2]))
         else:
-            sources.append((self._committed[0], self._committed[1:], hist[1:]))
+            sources.append((self._committed[0], self._committed[1:], hist[1:2]))
         for old_keys, olds, news in sources:
             if not (old_keys.size and keys.size):
                 continue
@@ -570,13 +571,13 @@ class BlockContact(Interaction):
                     new[hit] = old[pos[hit]]
         order = np.argsort(keys, kind="stable")
         self._install(pairs[order], keys[order], counted[order], hist[0][order],
-                      hist[1][order])
+                      hist[1][order], hist[2][order])
         self.travel = 0.0
         self.since = 0
         self.rebuilds += 1
         self._u_rebuild[:] = self.model.u.x.array[: self._u_rebuild.size]
 
-    def _install(self, pairs, keys, counted, tau, tau_c) -> None:
+    def _install(self, pairs, keys, counted, tau, tau_c, tforce=None) -> None:
         """Take the candidate pairs (sorted by key), which of them this rank counts, their
         history, and the arrays that follow from them."""
         self.pairs = np.ascontiguousarray(pairs, dtype=np.int64).reshape(-1, 2)
@@ -591,6 +592,9 @@ class BlockContact(Interaction):
             self.n_local_nodes)
         self.tau, self.tau_c = (np.ascontiguousarray(h, dtype=float).reshape(-1, 2)
                                 for h in (tau, tau_c))
+        # the passes' friction forces at the last evaluation [N] (their dissipation)
+        self.tforce = (np.zeros_like(self.tau) if tforce is None else
+                       np.ascontiguousarray(tforce, dtype=float).reshape(-1, 2))
         ma = self.facet_material[self.pairs[:, 0]]
         mb = self.facet_material[self.pairs[:, 1]]
         self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
@@ -662,7 +666,7 @@ class BlockContact(Interaction):
         K.facet_facet_forces(
             self.X, self.u, self.v, self.facets, self.fprev, self.fnext, self.pairs,
             self.eps_n, self.eps_t, self.mu, cdamp, self.depth, self.model.width, dt,
-            self.tau, self.counted, self.fp, self.fdp, self.energy, self._work,
+            self.tau, self.tforce, self.counted, self.fp, self.fdp, self.energy, self._work,
             self._zones, live,
         )
         nloc = 2 * self.n_local_nodes
@@ -748,12 +752,13 @@ class BlockContact(Interaction):
         # the committed history is the one just set
         self._committed = (self.keys.copy(), self.tau_c.copy())
         self._fd_live = False
+        self.tforce = np.zeros_like(self.tau)
         self.rebuild(np.zeros_like(self.model.v))
 
     #: what :meth:`checkpoint_state` keeps beyond :meth:`state`
     _checkpoint_extra = ("travel", "since", "_u_rebuild", "_fd", "_u1", "_u2", "_fd_nodes",
                          "_fd_live", "_work", "_acc", "cdamp", "fp", "fdp", "inv_mass",
-                         "inv_inertia")
+                         "inv_inertia", "tforce")
 
     def checkpoint_state(self) -> dict:
         """:meth:`state` and what a resumed run needs to go on exactly as the run would
