@@ -180,7 +180,7 @@ def test_cell_grid_flags_every_box_that_meets(seed):
     """The coarse grid the ranks pick their ghost facets with: a box of one set that meets
     (closed) a box of the other is always flagged, however the boxes straddle, touch or
     cover the cells (long thin boxes included); boxes far from all are not."""
-    from masonry_fdem.interactions.search._kernels import boxes_on_cells, mark_cells
+    from masonry_fdem.interactions.search import boxes_on_cells, mark_cells
 
     rng = np.random.default_rng(seed)
 

@@ -31,8 +31,13 @@ import numpy as np
 from masonry_fdem.interactions._sums import gather_rows, node_lists
 from masonry_fdem.interactions.contact import _kernels as K
 from masonry_fdem.interactions.protocol import BLOCKS, Interaction, State
-from masonry_fdem.interactions.search import facet_boxes, max_speed, self_pairs
-from masonry_fdem.interactions.search._kernels import boxes_on_cells, mark_cells
+from masonry_fdem.interactions.search import (
+    boxes_on_cells,
+    facet_boxes,
+    mark_cells,
+    max_speed,
+    self_pairs,
+)
 from masonry_fdem.parallel import exchange_ids
 
 __all__ = ["ContactSettings", "BlockContact", "restitution_damping_ratio",

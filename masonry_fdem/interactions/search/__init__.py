@@ -1,7 +1,12 @@
 """Broad phase: the alternating digital tree (Bonet & Peraire 1991) over facet boxes,
 and the box and speed helpers the neighbour lists are built from."""
 
-from masonry_fdem.interactions.search._kernels import facet_boxes, max_speed
+from masonry_fdem.interactions.search._kernels import (
+    boxes_on_cells,
+    facet_boxes,
+    mark_cells,
+    max_speed,
+)
 from masonry_fdem.interactions.search.adt import (
     ADTree,
     brute_force_pairs,
@@ -11,8 +16,8 @@ from masonry_fdem.interactions.search.adt import (
     self_pairs,
 )
 
-__all__ = ["ADTree", "brute_force_pairs", "build_adt", "facet_boxes", "inflate", "max_speed",
-           "query_adt", "self_pairs"]
+__all__ = ["ADTree", "boxes_on_cells", "brute_force_pairs", "build_adt", "facet_boxes",
+           "inflate", "mark_cells", "max_speed", "query_adt", "self_pairs"]
 
 
 def precompile() -> None:
