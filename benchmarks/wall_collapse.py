@@ -4,9 +4,14 @@ A dry-jointed brick wall on a fixed base, its top courses pushed sideways, falls
 under gravity. The script times, in the same run, the whole explicit step and the part
 spent in neighbour-list rebuilds (ADT build + query, with the travel margin deciding when
 to rebuild) and in the contact kernel, and prints their medians per step and the
-search share (goal: contact search <= 30 % of a full step).
-Run: ``python benchmarks/wall_collapse.py [--courses 12 --bricks 8 --mesh-size 0.03]``.
+search share (goal: contact search <= 30 % of a full step). At the end it prints a
+digest (SHA-256) of every node's final position in input order: the same digest from
+runs on 1 and on 2 ranks means final states equal to the bit.
+Run: ``python benchmarks/wall_collapse.py [--courses 12 --bricks 8 --mesh-size 0.03]``,
+then ``mpirun -n 2 python benchmarks/wall_collapse.py`` (same options) and compare.
 """
+
+import hashlib
 
 import argparse
 import time
@@ -66,7 +71,13 @@ def main():
         samples.append(((time.perf_counter() - t0) / chunk, (t_search[0] - s0) / chunk))
     step = float(np.median([s[0] for s in samples]))
     search = float(np.median([s[1] for s in samples]))
+    n = model.n_nodes
+    mine = np.c_[model.node_input, model.u.x.array[: 2 * n].reshape(-1, 2)]
+    rows = comm.gather(mine, root=0)
     if comm.rank == 0:
+        rows = np.concatenate(rows)
+        rows = rows[np.argsort(rows[:, 0], kind="stable")]
+        digest = hashlib.sha256(np.ascontiguousarray(rows[:, 1:]).tobytes()).hexdigest()[:16]
         print(f"wall: {len(wall)} bricks + base, {blocks.n_cells} cells, "
               f"{contact.g_facets.shape[0]} boundary facets, {comm.size} rank(s)")
         print(f"dt = {solver.dt:.3e} s; {contact.rebuilds - rebuilds0} rebuilds in "
@@ -74,6 +85,9 @@ def main():
               f"{contact.pairs.shape[0]} candidate pairs at the end")
         print(f"median full step {1e6 * step:.1f} us, of which contact search "
               f"{1e6 * search:.1f} us = {100 * search / step:.1f} % (goal <= 30 %)")
+        print(f"final positions of {rows.shape[0]} nodes, in input order: SHA-256 {digest} "
+              f"(largest displacement {np.abs(rows[:, 1:]).max():.3e} m; the same digest "
+              f"on any rank count = equal to the bit)")
 
 
 if __name__ == "__main__":
