@@ -605,6 +605,11 @@ def _cell_sweep(x, r, margin, order, start, nx, ny, buf):
             c = gy * nx + gx
             for a in range(start[c], start[c + 1]):
                 i = order[a]
+                # disk i's centre and radius in locals: the stores into buf below could
+                # alias x and r for the compiler, which would load them again per pair
+                xi = x[i, 0]
+                yi = x[i, 1]
+                ri = r[i]
                 for nb in range(5):
                     if nb == 0:
                         lo = a + 1
@@ -619,7 +624,10 @@ def _cell_sweep(x, r, margin, order, start, nx, ny, buf):
                         hi = start[h2 + 1]
                     for q in range(lo, hi):
                         j = order[q]
-                        if _near(x, r, margin, i, j):
+                        dx = x[j, 0] - xi
+                        dy = x[j, 1] - yi
+                        sr = ri + r[j] + margin  # as _near sums it
+                        if dx * dx + dy * dy < sr * sr:
                             if cnt == cap:
                                 return -1
                             buf[cnt, 0] = min(i, j)
