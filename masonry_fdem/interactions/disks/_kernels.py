@@ -651,8 +651,32 @@ def disk_pairs_cell_list(x, r, margin):
         (k, 2) int64 pairs i < j, sorted lexicographically and unique.
     """
     n = x.shape[0]
+    buf = np.empty((max(4 * n, 16), 2), dtype=np.int64)
+    out = np.empty((0, 2), dtype=np.int64)
+    while True:
+        cnt = cell_list_pairs_into(x, r, margin, buf, out)
+        if cnt == -1:
+            buf = np.empty((2 * buf.shape[0], 2), dtype=np.int64)
+        elif cnt < -1:
+            out = np.empty((-cnt - 2, 2), dtype=np.int64)
+        else:
+            return out[:cnt]
+
+
+@njit(cache=True)
+def cell_list_pairs_into(x, r, margin, buf, out):
+    """:func:`disk_pairs_cell_list` into buffers the caller keeps (a rebuild then
+    allocates and first-touches no pair-sized memory: at 1e6 disks that was a fifth of a
+    rebuild). ``buf`` (m, 2) int64 is scratch, ``out`` (k', 2) int64 receives the sorted
+    pairs in its first rows.
+
+    Returns:
+        k, the number of pairs (in ``out[:k]``); −1 if ``buf`` is too small (try again
+        with a larger one); −(k + 2) if ``out`` is (nothing written there).
+    """
+    n = x.shape[0]
     if n < 2:
-        return np.empty((0, 2), dtype=np.int64)
+        return 0
     x0, y0, h, nx, ny = _grid(x, r, margin)
     cx = np.empty(n, dtype=np.int64)
     cy = np.empty(n, dtype=np.int64)
@@ -669,20 +693,19 @@ def disk_pairs_cell_list(x, r, margin):
         c = cy[i] * nx + cx[i]
         order[fill[c]] = i
         fill[c] += 1
-    # one sweep over the cells, each pair met once, into a buffer (a dense packing
-    # has ~3 candidates per disk); sweep again with a twice larger one if it overflows
-    buf = np.empty((max(4 * n, 16), 2), dtype=np.int64)
+    # one sweep over the cells, each pair met once, into the buffer (a dense packing
+    # has ~3 candidates per disk)
     cnt = _cell_sweep(x, r, margin, order, start, nx, ny, buf)
-    while cnt < 0:
-        buf = np.empty((2 * buf.shape[0], 2), dtype=np.int64)
-        cnt = _cell_sweep(x, r, margin, order, start, nx, ny, buf)
+    if cnt < 0:
+        return -1
+    if cnt > out.shape[0]:
+        return -(cnt + 2)
     # sorted by (i, j): counted into rows by i, each row's few j by insertion
     offs = np.zeros(n + 1, dtype=np.int64)
     for k in range(cnt):
         offs[buf[k, 0] + 1] += 1
     for i in range(n):
         offs[i + 1] += offs[i]
-    out = np.empty((cnt, 2), dtype=np.int64)
     for k in range(cnt):
         i = buf[k, 0]
         out[offs[i], 0] = i
@@ -699,7 +722,7 @@ def disk_pairs_cell_list(x, r, margin):
                 b -= 1
             out[b + 1, 1] = jj
         lo = hi
-    return out
+    return cnt
 
 
 @njit(cache=True)

@@ -229,6 +229,12 @@ class Disks(Interaction):
         self._fresh = True  # the first update() rebuilds (and sorts)
         self.pairs = np.empty((0, 2), dtype=np.int64)
         self.hist = np.zeros((0, DK.N_HIST))
+        # the neighbour search's buffers: two pair lists and histories used in turn, and
+        # its scratch (see _rebuild)
+        self._pair_bufs = [np.empty((0, 2), dtype=np.int64) for _ in range(2)]
+        self._hist_bufs = [np.empty((0, DK.N_HIST)) for _ in range(2)]
+        self._cur = 0
+        self._sweep = np.empty((0, 2), dtype=np.int64)
         self._x_ref = self.x.copy()
         self.rebuilds = 0
         self.work = np.zeros(DK.N_WORK)
@@ -320,8 +326,25 @@ class Disks(Interaction):
                 perm = None
             else:
                 self._permute(perm)
-        pairs = DK.disk_pairs_cell_list(self.x, self.r, self.margin)
-        hist = np.zeros((pairs.shape[0], DK.N_HIST))
+        # the pairs and their history go into the buffers the list before last used
+        # (kept: allocating them anew cost a fifth of a rebuild at 1e6 disks); the
+        # current list, in the other buffers or the caller's arrays, is read meanwhile
+        k = 1 - self._cur
+        out, hbuf = self._pair_bufs[k], self._hist_bufs[k]
+        while True:
+            cnt = DK.cell_list_pairs_into(self.x, self.r, self.margin, self._sweep, out)
+            if cnt == -1:
+                self._sweep = np.empty((max(2 * self._sweep.shape[0], 4 * self.n, 16), 2),
+                                       dtype=np.int64)
+            elif cnt < -1:
+                out = np.empty((int(1.25 * (-cnt - 2)) + 16, 2), dtype=np.int64)
+            else:
+                break
+        if hbuf.shape[0] < out.shape[0]:
+            hbuf = np.empty((out.shape[0], DK.N_HIST))
+        self._pair_bufs[k], self._hist_bufs[k] = out, hbuf
+        self._cur = k
+        pairs, hist = out[:cnt], hbuf[:cnt]  # every row of hist is written below
         if perm is None:
             DK.carry_history(self.pairs, self.hist, pairs, hist)
         else:
