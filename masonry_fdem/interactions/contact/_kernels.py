@@ -391,6 +391,16 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
 
 
 @njit(cache=True, inline="always")
+def _end_pair(f, b, gx, gy):
+    """Add (gx, gy) [N] on the second node of the facet whose slots in ``f`` start at b,
+    and its opposite on the first (a force pair along the facet's two ends)."""
+    f[b] -= gx
+    f[b + 1] -= gy
+    f[b + 2] += gx
+    f[b + 3] += gy
+
+
+@njit(cache=True, inline="always")
 def _release(k, p, tau, tforce, eps_t):
     """Pass p of pair k separated: its tangential spring lets go (history zeroed); the
     energy it held, F t / (2 ε_t) [J], is returned, to be counted as dissipated."""
@@ -569,26 +579,13 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         tsx = (q2x - q1x) / ls
         tsy = (q2y - q1y) / ls
         # ∂ℓ_s: Π ∝ ℓ_s
-        f[sb] += pot / ls * tsx
-        f[sb + 1] += pot / ls * tsy
-        f[sb + 2] -= pot / ls * tsx
-        f[sb + 3] -= pot / ls * tsy
+        _end_pair(f, sb, -pot / ls * tsx, -pot / ls * tsy)
         cosf = ((q2x - q1x) * tx + (q2y - q1y) * ty) / ls  # as in _pass_share: < 0
         if -FACING < cosf < 0.0:
             # share = −cos/(2 FACING): −∂Π/∂x = Π/(−cos) ∂cos/∂x
             a = pot / -cosf
-            gx = a * (tx - cosf * tsx) / ls  # on q2 (q1: the opposite)
-            gy = a * (ty - cosf * tsy) / ls
-            f[sb] -= gx
-            f[sb + 1] -= gy
-            f[sb + 2] += gx
-            f[sb + 3] += gy
-            gx = a * (tsx - cosf * tx) / lm  # on p2 (p1: the opposite)
-            gy = a * (tsy - cosf * ty) / lm
-            f[mb] -= gx
-            f[mb + 1] -= gy
-            f[mb + 2] += gx
-            f[mb + 3] += gy
+            _end_pair(f, sb, a * (tx - cosf * tsx) / ls, a * (ty - cosf * tsy) / ls)
+            _end_pair(f, mb, a * (tsx - cosf * tx) / lm, a * (tsy - cosf * ty) / lm)
         if cd > 0.0:
             fdamp[sb] += ds1 * nx
             fdamp[sb + 1] += ds1 * ny

@@ -392,11 +392,13 @@ def carry_history(old_pairs, old_hist, new_pairs, new_hist):
     return carried
 
 
-@njit(cache=True)
-def _near(x, r, margin, i, j):
-    dx = x[j, 0] - x[i, 0]
-    dy = x[j, 1] - x[i, 1]
-    s = r[i] + r[j] + margin
+@njit(cache=True, inline="always")
+def _near(x, r, margin, xi, yi, ri, j):
+    """Whether disk j is closer than r_i + r_j + margin to disk i (centre (xi, yi),
+    radius ri, passed in: a loop over j keeps them in registers)."""
+    dx = x[j, 0] - xi
+    dy = x[j, 1] - yi
+    s = ri + r[j] + margin
     return dx * dx + dy * dy < s * s
 
 
@@ -407,13 +409,13 @@ def brute_force_disk_pairs(x, r, margin):
     cnt = 0
     for i in range(n):
         for j in range(i + 1, n):
-            if _near(x, r, margin, i, j):
+            if _near(x, r, margin, x[i, 0], x[i, 1], r[i], j):
                 cnt += 1
     out = np.empty((cnt, 2), dtype=np.int64)
     cnt = 0
     for i in range(n):
         for j in range(i + 1, n):
-            if _near(x, r, margin, i, j):
+            if _near(x, r, margin, x[i, 0], x[i, 1], r[i], j):
                 out[cnt, 0] = i
                 out[cnt, 1] = j
                 cnt += 1
@@ -624,10 +626,7 @@ def _cell_sweep(x, r, margin, order, start, nx, ny, buf):
                         hi = start[h2 + 1]
                     for q in range(lo, hi):
                         j = order[q]
-                        dx = x[j, 0] - xi
-                        dy = x[j, 1] - yi
-                        sr = ri + r[j] + margin  # as _near sums it
-                        if dx * dx + dy * dy < sr * sr:
+                        if _near(x, r, margin, xi, yi, ri, j):
                             if cnt == cap:
                                 return -1
                             buf[cnt, 0] = min(i, j)
@@ -650,17 +649,24 @@ def disk_pairs_cell_list(x, r, margin):
     Returns:
         (k, 2) int64 pairs i < j, sorted lexicographically and unique.
     """
-    n = x.shape[0]
-    buf = np.empty((max(4 * n, 16), 2), dtype=np.int64)
-    out = np.empty((0, 2), dtype=np.int64)
+    empty = np.empty((0, 2), dtype=np.int64)
+    cnt, _, out = cell_list_pairs_grow(x, r, margin, empty, empty)
+    return out[:cnt]
+
+
+@njit(cache=True)
+def cell_list_pairs_grow(x, r, margin, buf, out):
+    """:func:`cell_list_pairs_into`, with the scratch ``buf`` and the output ``out``
+    replaced by larger ones as long as one is too small. Returns (k, buf, out), the
+    pairs in ``out[:k]`` (the buffers may be kept for the next search)."""
     while True:
         cnt = cell_list_pairs_into(x, r, margin, buf, out)
         if cnt == -1:
-            buf = np.empty((2 * buf.shape[0], 2), dtype=np.int64)
+            buf = np.empty((max(2 * buf.shape[0], 4 * x.shape[0], 16), 2), dtype=np.int64)
         elif cnt < -1:
-            out = np.empty((-cnt - 2, 2), dtype=np.int64)
+            out = np.empty((int(1.25 * (-cnt - 2)) + 16, 2), dtype=np.int64)
         else:
-            return out[:cnt]
+            return cnt, buf, out
 
 
 @njit(cache=True)

@@ -330,16 +330,9 @@ class Disks(Interaction):
         # (kept: allocating them anew cost a fifth of a rebuild at 1e6 disks); the
         # current list, in the other buffers or the caller's arrays, is read meanwhile
         k = 1 - self._cur
-        out, hbuf = self._pair_bufs[k], self._hist_bufs[k]
-        while True:
-            cnt = DK.cell_list_pairs_into(self.x, self.r, self.margin, self._sweep, out)
-            if cnt == -1:
-                self._sweep = np.empty((max(2 * self._sweep.shape[0], 4 * self.n, 16), 2),
-                                       dtype=np.int64)
-            elif cnt < -1:
-                out = np.empty((int(1.25 * (-cnt - 2)) + 16, 2), dtype=np.int64)
-            else:
-                break
+        cnt, self._sweep, out = DK.cell_list_pairs_grow(self.x, self.r, self.margin,
+                                                       self._sweep, self._pair_bufs[k])
+        hbuf = self._hist_bufs[k]
         if hbuf.shape[0] < out.shape[0]:
             hbuf = np.empty((out.shape[0], DK.N_HIST))
         self._pair_bufs[k], self._hist_bufs[k] = out, hbuf
