@@ -374,13 +374,17 @@ class ExplicitSolver:
         m.commit_state()
         if self._start is None:
             self._start = self._start_values()
+        one = len(self.interactions) == 1  # its forces are f_con: the step sums its work
         for s in self.sets:
-            K.central_difference_step(s.u, s.v, s.f_int, s.f_ext, s.f_con, s.mass, s.minv,
-                                      s.presc, s.vp, self.damping, self.dt, s.reaction,
-                                      s.energy, s.du, s.local)
-        for k, st in enumerate(self._states):
-            for s in self.sets:
-                self.work[int(s.replicated), k] += K.dot(st.f[s.name], s.du)
+            w = K.central_difference_step(s.u, s.v, s.f_int, s.f_ext, s.f_con, s.mass,
+                                          s.minv, s.presc, s.vp, self.damping, self.dt,
+                                          s.reaction, s.energy, s.du, s.local)
+            if one:
+                self.work[int(s.replicated), 0] += w
+        if self._own:
+            for k, st in enumerate(self._states):
+                for s in self.sets:
+                    self.work[int(s.replicated), k] += K.dot(st.f[s.name], s.du)
         self.t += self.dt
         self.n += 1
 
