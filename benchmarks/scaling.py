@@ -31,6 +31,15 @@ and the full step in nanoseconds per element-step. At the end the positions of e
 node after the run on one rank and on P ranks are compared (they should be equal to the
 bit: forces are summed in one global order).
 
+``--preset disks``: the same phases for disks — the jammed, vibrating packing of
+``benchmarks/disks.py`` (``--disks``, default 1e5; its outer ring fixed, no gravity), in
+the package's explicit solver, on one rank and on all: disk search (the travel check and
+any rebuild of the pair list), disk forces, the rest (the central-difference update of
+the disks and the solver's loop). Every rank holds every disk and computes the forces of
+all of them (``masonry_fdem.interactions.disks``: a replicated dof set), so this phase
+does not divide among ranks: the figures show by how much it does not; the final centres
+on one and on P ranks are compared as above.
+
 Run: ``mpirun -n 2 python benchmarks/scaling.py [--preset facets|elements] [--steps 600]``.
 """
 
@@ -38,6 +47,7 @@ from __future__ import annotations
 
 import argparse
 import statistics
+import sys
 import time
 from collections import defaultdict
 
@@ -84,6 +94,54 @@ def build(args, comm):
     return model, solver, contact, joints, anchors
 
 
+def measure_disks(args, comm):
+    """:func:`measure` for the ``disks`` preset: median time per step of the disk phases
+    (slowest rank), the final centres in the user's numbering, and facts of the run."""
+    import importlib.util  # noqa: PLC0415
+    from pathlib import Path  # noqa: PLC0415
+
+    from masonry_fdem.geometry import rectangle  # noqa: PLC0415
+    from masonry_fdem.interactions.disks import Disks  # noqa: PLC0415
+
+    spec = importlib.util.spec_from_file_location(
+        "disk_benchmark", Path(__file__).with_name("disks.py"))
+    DB = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = DB  # (its dataclasses look their module up)
+    spec.loader.exec_module(DB)
+    p = DB.packing(int(args.disks))
+    d = Disks(p.x, p.r, {"gravel": DB.MAT}, "gravel", width=DB.WIDTH,
+              margin=DB.MARGIN * p.r.min(), max_overlap=p.max_overlap, comm=comm)
+    d.v[:] = p.v
+    d.omega[:] = p.omega
+    d.fix(p.fixed)
+    lo = p.x.min(axis=0) - 10.0 * DB.R0  # the solver advances a model: a fixed block aside
+    blocks = mesh_blocks([rectangle(lo[0] - DB.R0, lo[1] - DB.R0, lo[0], lo[1])],
+                         materials="b", mesh_size=DB.R0, comm=comm)
+    model = Model(blocks, {"b": Material(2600.0, 1e9, 0.25)}, width=DB.WIDTH, comm=comm)
+    model.fix_blocks(0)
+    solver = ExplicitSolver(model, dt=p.dt, interactions=d)
+    tm = Timers()
+    tm.wrap(d, "update", "disk search")
+    tm.wrap(d, "add_forces", "disk forces")
+    tm.wrap(model, "internal_force", "elements")
+    solver.run(steps=20)  # warm-up: JIT caches, first search and sort
+    samples = defaultdict(list)
+    for _ in range(max(1, args.steps // args.chunk)):
+        before = dict(tm.t)
+        comm.barrier()
+        t0 = time.perf_counter()
+        solver.run(steps=args.chunk)
+        total = time.perf_counter() - t0
+        row = {k: (tm.t[k] - before.get(k, 0.0)) / args.chunk for k in tm.t}
+        row["full step"] = total / args.chunk
+        row["rest"] = row["full step"] - sum(row[k] for k in DISK_PHASES[:3])
+        for k, v in row.items():
+            samples[k].append(comm.allreduce(v, op=MPI.MAX))
+    med = {k: statistics.median(v) for k, v in samples.items()}
+    info = dict(disks=d.n, pairs=int(d.pairs.shape[0]), dt=solver.dt, rebuilds=d.rebuilds)
+    return med, d.by_id(d.x.reshape(-1, 2)).copy(), info
+
+
 class Timers:
     """Wall-clock time [s] spent in named calls, wrapped around bound methods."""
 
@@ -108,6 +166,8 @@ class Timers:
 #: ~113 triangles each, as a model whose bricks may crack is meshed: the full step)
 PRESETS = {"facets": dict(courses=160, bricks=160, mesh_size=None),
            "elements": dict(courses=30, bricks=30, mesh_size=0.02)}
+
+DISK_PHASES = ("disk search", "disk forces", "elements", "rest", "full step")
 
 PHASES = ("contact search", "contact halo", "contact kernels", "joints", "anchors",
           "elements", "rest", "full step")
@@ -167,10 +227,12 @@ def measure(args, comm):
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--preset", choices=sorted(PRESETS), default="facets",
+    ap.add_argument("--preset", choices=[*sorted(PRESETS), "disks"], default="facets",
                     help="facets: 160 x 160 bricks of two triangles (~100 000 boundary "
                          "facets, the contact scaling); elements: 30 x 30 bricks meshed "
-                         "at 20 mm (~100 000 elements, the full step)")
+                         "at 20 mm (~100 000 elements, the full step); disks: the disk "
+                         "phases on a jammed packing of --disks disks")
+    ap.add_argument("--disks", type=float, default=1e5, help="disks of the disks preset")
     ap.add_argument("--courses", type=int, default=None, help="(default: the preset's)")
     ap.add_argument("--bricks", type=int, default=None,
                     help="bricks per course (default: the preset's)")
@@ -182,6 +244,8 @@ def main():
     ap.add_argument("--rebuild-every", type=int, default=20)
     ap.add_argument("--anchor-spacing", type=float, default=2.0, help="[m]")
     args = ap.parse_args()
+    if args.preset == "disks":
+        return main_disks(args)
     for k, v in PRESETS[args.preset].items():
         if getattr(args, k) is None:
             setattr(args, k, v)
@@ -232,6 +296,45 @@ def main():
         scale = np.abs(rows1[:, 3:]).max()
         print(f"final positions, {size} ranks against 1: largest difference {diff:.1e} m "
               f"(largest displacement {scale:.2e} m){'; equal to the bit' if diff == 0 else ''}")
+
+
+def main_disks(args):
+    """The ``disks`` preset: measure on rank 0 alone, then on all ranks; print."""
+    world = MPI.COMM_WORLD
+    size = world.size
+    res = {}
+    if world.rank == 0:
+        res[1] = measure_disks(args, MPI.COMM_SELF)
+    world.barrier()
+    if size > 1:
+        res[size] = measure_disks(args, world)
+    if world.rank != 0:
+        return
+    med1, x1, info = res[1]
+    print(f"disks: {info['disks']} disks (jammed packing of benchmarks/disks.py), "
+          f"{info['pairs']} candidate pairs, dt = {info['dt']:.3e} s, "
+          f"{info['rebuilds']} pair-list builds; every rank holds and computes every disk")
+    print(f"median time per step over {args.steps} steps in chunks of {args.chunk} "
+          f"(slowest rank)")
+    head = f"{'phase':<17}{'1 rank [us]':>13}"
+    if size > 1:
+        head += f"{f'{size} ranks [us]':>15}{'speed-up':>10}{'efficiency':>12}"
+    print(head)
+    medp = res[size][0] if size > 1 else None
+    for k in DISK_PHASES:
+        line = f"{k:<17}{1e6 * med1[k]:13.1f}"
+        if medp is not None:
+            line += (f"{1e6 * medp[k]:15.1f}{med1[k] / medp[k]:10.2f}"
+                     f"{med1[k] / (size * medp[k]):12.2f}")
+        print(line)
+    print(f"full step: {1e9 * med1['full step'] / info['disks']:.1f} ns per disk-step on 1 "
+          "rank" + (f", {1e9 * medp['full step'] / info['disks']:.1f} on {size}"
+                    if medp is not None else ""))
+    if size > 1:
+        xp = res[size][1]
+        diff = float(np.abs(xp - x1).max())
+        print(f"final centres, {size} ranks against 1: largest difference {diff:.1e} m"
+              f"{'; equal to the bit' if diff == 0 else ''}")
 
 
 if __name__ == "__main__":
