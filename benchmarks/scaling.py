@@ -35,10 +35,12 @@ bit: forces are summed in one global order).
 ``benchmarks/disks.py`` (``--disks``, default 1e5; its outer ring fixed, no gravity), in
 the package's explicit solver, on one rank and on all: disk search (the travel check and
 any rebuild of the pair list), disk forces, the rest (the central-difference update of
-the disks and the solver's loop). Every rank holds every disk and computes the forces of
-all of them (``masonry_fdem.interactions.disks``: a replicated dof set), so this phase
-does not divide among ranks: the figures show by how much it does not; the final centres
-on one and on P ranks are compared as above.
+the disks and the solver's loop). Every rank holds every disk (a replicated dof set);
+each computes the forces of the pairs touching the disks it owns, a contiguous share of
+the storage order, and the shares are gathered (``Disks.add_forces``), so the force
+phase divides among the ranks while the search and the update are done by each rank
+for all; the final centres on one and on P ranks are compared as above (equal to the
+bit: each disk's force is summed over its pairs in the list's order on any rank count).
 
 Run: ``mpirun -n 2 python benchmarks/scaling.py [--preset facets|elements] [--steps 600]``.
 """
@@ -313,7 +315,8 @@ def main_disks(args):
     med1, x1, info = res[1]
     print(f"disks: {info['disks']} disks (jammed packing of benchmarks/disks.py), "
           f"{info['pairs']} candidate pairs, dt = {info['dt']:.3e} s, "
-          f"{info['rebuilds']} pair-list builds; every rank holds and computes every disk")
+          f"{info['rebuilds']} pair-list builds; every rank holds every disk, the forces "
+          "are computed by the ranks owning the disks and gathered")
     print(f"median time per step over {args.steps} steps in chunks of {args.chunk} "
           f"(slowest rank)")
     head = f"{'phase':<17}{'1 rank [us]':>13}"

@@ -237,10 +237,26 @@ def _spring(u, k_old, k_new, du, cap):
     return u, loss
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True)
 def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torque, work):
     """Hertz–Mindlin–Coulomb forces (with hysteretic restitution and optional rolling
-    resistance) of all candidate pairs; see the module docstring for the laws.
+    resistance) of all candidate pairs; see the module docstring for the laws and
+    :func:`disk_disk_forces_range` for the arguments (here every disk is owned)."""
+    disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torque,
+                           work, 0, r.size)
+
+
+@njit(cache=True, error_model="numpy")
+def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torque,
+                           work, lo, hi):
+    """Hertz–Mindlin–Coulomb forces (with hysteretic restitution and optional rolling
+    resistance) of the candidate pairs that touch the disks lo ≤ k < hi (the disks a rank
+    owns); see the module docstring for the laws.
+
+    Only the owned disks' forces and torques are added to, each from its pairs in the
+    order of the list, so that they are bitwise those of a call over every disk; a pair
+    that touches no owned disk is skipped (its history row is left as it was); the
+    energies count the pairs whose first disk is owned (each pair on one rank).
 
     Args:
         x: (n, 2) centres [m] at step n.
@@ -257,6 +273,7 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
         torque: (n,) out, torques ADDED [N m].
         work: (N_WORK,) out: W_EN, W_ET, W_ER set to the energies stored now, W_HYST,
             W_FRIC, W_ROLL incremented by this step's dissipation [J].
+        lo, hi: the owned disks (0, n: all).
     """
     # the energies and dissipations are summed in locals (a store to ``work`` per pair
     # was a memory round trip in the loop's critical path), the overlap is tested on the
@@ -272,6 +289,10 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
     for k in range(pairs.shape[0]):
         i = pairs[k, 0]
         j = pairs[k, 1]
+        own_i = lo <= i < hi
+        own_j = lo <= j < hi
+        if not (own_i or own_j):
+            continue
         dx = x[j, 0] - x[i, 0]
         dy = x[j, 1] - x[i, 1]
         ri = r[i]
@@ -298,17 +319,21 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
         # --- normal: hysteretic Hertz
         dmax = hist[k, H_DMAX]
         fn = 0.0
+        p_hyst = 0.0  # this pair's energies, counted where its first disk is owned
+        p_en = 0.0
+        p_roll = 0.0
+        p_er = 0.0
         if delta >= dmax:  # loading (s = δ)
-            w_hyst += 0.4 * (1.0 - e * e) * kh * (
+            p_hyst = 0.4 * (1.0 - e * e) * kh * (
                 delta * delta * sq - dmax * dmax * math.sqrt(dmax))
             dmax = delta
             fn = kh * delta * sq
-            e_n += 0.4 * e * e * fn * delta
+            p_en = 0.4 * e * e * fn * delta
         else:
             s = (delta - dmax * (1.0 - e * e)) / (e * e)
             if s > 0.0:
                 fn = kh * s * math.sqrt(s)
-                e_n += 0.4 * e * e * fn * s
+                p_en = 0.4 * e * e * fn * s
         # --- relative motion of the contact point (middle of the overlap)
         ai = ri - 0.5 * delta
         aj = rj - 0.5 * delta
@@ -317,11 +342,10 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
         kn_old = hist[k, H_KN]
         # --- tangential: Mindlin spring, Coulomb cap
         kt = kappa * kn
-        slip, loss = _spring(hist[k, H_SLIP], kappa * kn_old, kt, vt * dt,
-                             table[mi, mj, T_MU] * fn)
-        w_fric += loss
+        slip, p_fric = _spring(hist[k, H_SLIP], kappa * kn_old, kt, vt * dt,
+                               table[mi, mj, T_MU] * fn)
         ft = -kt * slip  # tangential force on j along t
-        e_t += 0.5 * kt * slip * slip
+        p_et = 0.5 * kt * slip * slip
         # --- rolling: elastic–plastic rolling spring
         mr = 0.0
         phi = 0.0
@@ -329,11 +353,10 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
         if mu_r > 0.0:
             r_star = ri * rj / rs
             c = ROLL_STIFFNESS * mu_r * mu_r * r_star * r_star
-            phi, loss = _spring(hist[k, H_ROLL], c * kn_old, c * kn,
-                                (omega[i] - omega[j]) * dt, mu_r * r_star * fn)
-            w_roll += loss
+            phi, p_roll = _spring(hist[k, H_ROLL], c * kn_old, c * kn,
+                                  (omega[i] - omega[j]) * dt, mu_r * r_star * fn)
             mr = -c * kn * phi  # rolling torque on i
-            e_r += 0.5 * c * kn * phi * phi
+            p_er = 0.5 * c * kn * phi * phi
         hist[k, H_SLIP] = slip
         hist[k, H_DMAX] = dmax
         hist[k, H_KN] = kn
@@ -341,12 +364,20 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
         # --- forces on j (−on i) and torques about each centre
         fx = fn * nx + ft * tx
         fy = fn * ny + ft * ty
-        f[j, 0] += fx
-        f[j, 1] += fy
-        f[i, 0] -= fx
-        f[i, 1] -= fy
-        torque[i] += -ai * ft + mr
-        torque[j] += -aj * ft - mr
+        if own_j:
+            f[j, 0] += fx
+            f[j, 1] += fy
+            torque[j] += -aj * ft - mr
+        if own_i:
+            f[i, 0] -= fx
+            f[i, 1] -= fy
+            torque[i] += -ai * ft + mr
+            w_hyst += p_hyst
+            e_n += p_en
+            w_fric += p_fric
+            e_t += p_et
+            w_roll += p_roll
+            e_r += p_er
     work[W_EN] = e_n
     work[W_ET] = e_t
     work[W_ER] = e_r

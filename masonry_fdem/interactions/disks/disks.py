@@ -146,7 +146,11 @@ class Disks(Interaction):
         margin: travel allowance of the pair list [m] (default: 0.2 r_min).
         max_overlap: the largest relative overlap δ/r_min expected, which bounds the
             Hertz stiffness in the stable time step (default 0.02).
-        comm: MPI communicator (all ranks hold all disks).
+        comm: MPI communicator (all ranks hold all disks; the disk–disk forces are
+            divided among them, see :meth:`add_forces`, so that on several ranks
+            whatever reads the pairs' history — :meth:`state`,
+            :meth:`pair_forces`, :meth:`contact_counts`, :meth:`cell_stress`,
+            :meth:`unbalanced_ratio` — is collective).
         sort: store the disks in cell order from the first step on (see the module
             docstring); False keeps the order given.
         sort_every: sort at every this many pair-list rebuilds (≥ 1), after the first
@@ -238,6 +242,17 @@ class Disks(Interaction):
         self._x_ref = self.x.copy()
         self.rebuilds = 0
         self.work = np.zeros(DK.N_WORK)
+        # on several ranks: the disks each rank owns in the force evaluation (contiguous
+        # shares of the storage order), its scratch and the shares' counts and offsets
+        size, rank = comm.size, comm.rank
+        self._bounds = np.array([p * self.n // size for p in range(size + 1)], dtype=np.int64)
+        self._own = (int(self._bounds[rank]), int(self._bounds[rank + 1]))
+        cnt = np.diff(self._bounds)
+        self._shares = (2 * cnt, 2 * self._bounds[:-1], cnt, self._bounds[:-1].copy())
+        self._fp = np.zeros((self.n, 2)) if size > 1 else np.zeros((0, 2))
+        self._tp = np.zeros(self.n) if size > 1 else np.zeros(0)
+        self._wp = np.zeros(DK.N_WORK)
+        self._hist_stale = False  # rows of pairs skipped by this rank are behind
         self._rebuild(sort=False)
         self._dofsets = (
             DofSet("disks", self.x.reshape(-1), self.v.reshape(-1), np.repeat(self.m, 2),
@@ -317,6 +332,7 @@ class Disks(Interaction):
     def _rebuild(self, sort: bool = True) -> None:
         """New candidate pairs at the current centres, after sorting the disks if it is
         time to (history carried, renumbered if they moved)."""
+        self._sync_hist()
         perm = None
         if sort and self.sort and (self._sorted_at is None
                                    or self.rebuilds - self._sorted_at >= self.sort_every):
@@ -374,12 +390,60 @@ class Disks(Interaction):
             self._fresh = False
 
     def add_forces(self, state: State) -> None:
-        """Disk–disk contact forces and torques at the current positions."""
-        DK.disk_disk_forces(state.u["disks"].reshape(-1, 2), state.v["disks"].reshape(-1, 2),
-                            state.v["disk_rotations"], self.r, self.mat, self.table,
-                            self.pairs, self.hist, self.width, state.dt,
-                            state.f["disks"].reshape(-1, 2), state.f["disk_rotations"],
-                            self.work)
+        """Disk–disk contact forces and torques at the current positions (collective).
+
+        On several ranks each rank computes the pairs touching the disks it owns (a
+        contiguous share of the storage order), adds into those disks only — each from
+        its pairs in the list's order, so bitwise as one rank would — and the shares are
+        gathered on every rank; the energies are summed over the ranks. The history rows
+        of the pairs a rank skipped are brought up to date when next read
+        (:meth:`_sync_hist`)."""
+        x = state.u["disks"].reshape(-1, 2)
+        v = state.v["disks"].reshape(-1, 2)
+        if self.comm.size == 1:
+            DK.disk_disk_forces(x, v, state.v["disk_rotations"], self.r, self.mat,
+                                self.table, self.pairs, self.hist, self.width, state.dt,
+                                state.f["disks"].reshape(-1, 2), state.f["disk_rotations"],
+                                self.work)
+            return
+        lo, hi = self._own
+        fp, tp, wp = self._fp, self._tp, self._wp
+        fp[lo:hi] = 0.0
+        tp[lo:hi] = 0.0
+        wp[:] = 0.0
+        DK.disk_disk_forces_range(x, v, state.v["disk_rotations"], self.r, self.mat,
+                                  self.table, self.pairs, self.hist, self.width, state.dt,
+                                  fp, tp, wp, lo, hi)
+        self._hist_stale = True
+        c2, d2, c1, d1 = self._shares
+        self.comm.Allgatherv(MPI.IN_PLACE, [fp, (c2, d2), MPI.DOUBLE])
+        self.comm.Allgatherv(MPI.IN_PLACE, [tp, (c1, d1), MPI.DOUBLE])
+        self.comm.Allreduce(MPI.IN_PLACE, wp, op=MPI.SUM)
+        state.f["disks"] += fp.reshape(-1)
+        state.f["disk_rotations"] += tp
+        w = self.work
+        for k in (DK.W_EN, DK.W_ET, DK.W_ER):  # stored now
+            w[k] = wp[k]
+        for k in (DK.W_HYST, DK.W_FRIC, DK.W_ROLL):  # dissipated in the step
+            w[k] += wp[k]
+
+    def _sync_hist(self) -> None:
+        """Give every rank the history rows of every pair (collective, after a force
+        evaluation on several ranks): the rank owning a pair's first disk sends its rows
+        (the list is sorted by first disk, so each rank's rows are one block)."""
+        if not self._hist_stale:
+            return
+        starts = np.searchsorted(self.pairs[:, 0], self._bounds)
+        n_h = self.hist.shape[1]
+        self.comm.Allgatherv(MPI.IN_PLACE, [self.hist, (np.diff(starts) * n_h,
+                                                        starts[:-1] * n_h), MPI.DOUBLE])
+        self._hist_stale = False
+
+    def state(self) -> dict:
+        """The state (:attr:`state_attributes`), the pairs' history brought up to date on
+        every rank first (collective on several ranks)."""
+        self._sync_hist()
+        return super().state()
 
     def energies(self) -> dict[str, float]:
         """Disk–disk contact energies [J] (every rank holds them all): stored (normal,
@@ -398,6 +462,7 @@ class Disks(Interaction):
         (minus that on disk i), at the current centres with the friction history of the
         last force evaluation; zero for pairs apart. ``pairs`` holds storage positions:
         ``ids[pairs]`` are the disks in the user's numbering."""
+        self._sync_hist()
         fc = np.zeros((self.pairs.shape[0], 2))
         DK.pair_forces(self.x, self.r, self.mat, self.table, self.pairs, self.hist,
                        self.width, fc)
@@ -499,6 +564,7 @@ class Disks(Interaction):
         super().set_state(state)
 
     def _state_changed(self) -> None:
+        self._hist_stale = False  # the state's history is every pair's
         self._fixed_xy[:] = np.repeat(self.fixed, 2)
         self._x_ref[:] = self.x
         self.slot[self.ids] = np.arange(self.n)
