@@ -426,7 +426,8 @@ class StaticSolver:
             self._x_at_forces[:] = xa
         fl = np.zeros(self.n_local)
         self._residual_into(fl)
-        rn = math.sqrt(self.comm.allreduce(float(np.dot(fl, fl))))
+        with np.errstate(over="ignore", invalid="ignore"):  # a diverged iterate: inf,
+            rn = math.sqrt(self.comm.allreduce(float(np.dot(fl, fl))))  # rejected below
         self._ref = self._reference()
         if converged and not (rn <= self.rtol * self._ref and (its > 0 or not self._moved)):
             # SNES said converged but the state is not in equilibrium (seen at the
