@@ -44,7 +44,7 @@ demo-trl: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/trl_arch.py --out out_trl
 
 # arch bridges with fill (issue #22): a single span, collapse load against the axle's
-# position, eight positions, with fill and bare (about 4 minutes on 2 cores); then two
+# position, eight positions, with fill and bare (about 5 minutes on 2 cores); then two
 # spans on a pier on soil under a traversing bogie, four positions (10-20 minutes)
 demo-bridge: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/bridge.py --out out_bridge

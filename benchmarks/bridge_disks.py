@@ -2,9 +2,9 @@
 under self-weight to an unbalanced-force ratio below 1e-3 within 10 minutes on 2 cores.
 
 The bridge is ``cases/bridge_single_span.toml`` (a 6 m segmental stone arch, rise 1.5 m,
-ring 0.4 m, 24 voussoirs, abutments 1 m wide and 0.8 m high, 0.4 m of fill over the crown,
+ring 0.4 m, 24 voussoirs, abutments 3 m wide and 0.8 m high, 0.4 m of fill over the crown,
 a 1 m strip of barrel). Its fill region (:func:`masonry_fdem.geometry.fill.fill_layout`:
-extrados and abutment tops up to the road, between the abutments' outer faces; 8.8 m²)
+extrados and abutment tops up to the road, between the abutments' outer faces; 17.0 m²)
 is packed with disks (:func:`masonry_fdem.interactions.disks.fill.fill_disks`: the
 region's bounding box packed at porosity 0.2, the disks wholly inside the region kept,
 a clearance of 1 % r_min to the blocks). Blocks: the voussoirs, the abutments (fixed) and
