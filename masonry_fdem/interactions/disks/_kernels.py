@@ -243,7 +243,7 @@ def disk_disk_forces(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torq
     resistance) of all candidate pairs; see the module docstring for the laws and
     :func:`disk_disk_forces_range` for the arguments (here every disk is owned)."""
     disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f, torque,
-                           work, 0, r.size)
+                           work, None, None)
 
 
 @njit(cache=True, error_model="numpy")
@@ -273,7 +273,8 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
         torque: (n,) out, torques ADDED [N m].
         work: (N_WORK,) out: W_EN, W_ET, W_ER set to the energies stored now, W_HYST,
             W_FRIC, W_ROLL incremented by this step's dissipation [J].
-        lo, hi: the owned disks (0, n: all).
+        lo, hi: the owned disks (None, None: all; a version compiled without the
+            ownership tests, which cost ~5 % of the loop on one rank).
     """
     # the energies and dissipations are summed in locals (a store to ``work`` per pair
     # was a memory round trip in the loop's critical path), the overlap is tested on the
@@ -289,10 +290,14 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
     for k in range(pairs.shape[0]):
         i = pairs[k, 0]
         j = pairs[k, 1]
-        own_i = lo <= i < hi
-        own_j = lo <= j < hi
-        if not (own_i or own_j):
-            continue
+        if lo is None:  # every disk owned: compiled apart, without the tests
+            own_i = True
+            own_j = True
+        else:
+            own_i = lo <= i < hi
+            own_j = lo <= j < hi
+            if not (own_i or own_j):
+                continue
         dx = x[j, 0] - x[i, 0]
         dy = x[j, 1] - x[i, 1]
         ri = r[i]
@@ -319,21 +324,20 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
         # --- normal: hysteretic Hertz
         dmax = hist[k, H_DMAX]
         fn = 0.0
-        p_hyst = 0.0  # this pair's energies, counted where its first disk is owned
-        p_en = 0.0
-        p_roll = 0.0
-        p_er = 0.0
         if delta >= dmax:  # loading (s = δ)
-            p_hyst = 0.4 * (1.0 - e * e) * kh * (
-                delta * delta * sq - dmax * dmax * math.sqrt(dmax))
+            if own_i:  # each pair's energies on one rank
+                w_hyst += 0.4 * (1.0 - e * e) * kh * (
+                    delta * delta * sq - dmax * dmax * math.sqrt(dmax))
             dmax = delta
             fn = kh * delta * sq
-            p_en = 0.4 * e * e * fn * delta
+            if own_i:
+                e_n += 0.4 * e * e * fn * delta
         else:
             s = (delta - dmax * (1.0 - e * e)) / (e * e)
             if s > 0.0:
                 fn = kh * s * math.sqrt(s)
-                p_en = 0.4 * e * e * fn * s
+                if own_i:
+                    e_n += 0.4 * e * e * fn * s
         # --- relative motion of the contact point (middle of the overlap)
         ai = ri - 0.5 * delta
         aj = rj - 0.5 * delta
@@ -342,10 +346,12 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
         kn_old = hist[k, H_KN]
         # --- tangential: Mindlin spring, Coulomb cap
         kt = kappa * kn
-        slip, p_fric = _spring(hist[k, H_SLIP], kappa * kn_old, kt, vt * dt,
-                               table[mi, mj, T_MU] * fn)
+        slip, loss = _spring(hist[k, H_SLIP], kappa * kn_old, kt, vt * dt,
+                             table[mi, mj, T_MU] * fn)
         ft = -kt * slip  # tangential force on j along t
-        p_et = 0.5 * kt * slip * slip
+        if own_i:
+            w_fric += loss
+            e_t += 0.5 * kt * slip * slip
         # --- rolling: elastic–plastic rolling spring
         mr = 0.0
         phi = 0.0
@@ -353,10 +359,12 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
         if mu_r > 0.0:
             r_star = ri * rj / rs
             c = ROLL_STIFFNESS * mu_r * mu_r * r_star * r_star
-            phi, p_roll = _spring(hist[k, H_ROLL], c * kn_old, c * kn,
-                                  (omega[i] - omega[j]) * dt, mu_r * r_star * fn)
+            phi, loss = _spring(hist[k, H_ROLL], c * kn_old, c * kn,
+                                (omega[i] - omega[j]) * dt, mu_r * r_star * fn)
             mr = -c * kn * phi  # rolling torque on i
-            p_er = 0.5 * c * kn * phi * phi
+            if own_i:
+                w_roll += loss
+                e_r += 0.5 * c * kn * phi * phi
         hist[k, H_SLIP] = slip
         hist[k, H_DMAX] = dmax
         hist[k, H_KN] = kn
@@ -372,12 +380,6 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
             f[i, 0] -= fx
             f[i, 1] -= fy
             torque[i] += -ai * ft + mr
-            w_hyst += p_hyst
-            e_n += p_en
-            w_fric += p_fric
-            e_t += p_et
-            w_roll += p_roll
-            e_r += p_er
     work[W_EN] = e_n
     work[W_ET] = e_t
     work[W_ER] = e_r
