@@ -375,11 +375,12 @@ def disk_disk_forces_range(x, v, omega, r, mat, table, pairs, hist, thick, dt, f
         if own_j:
             f[j, 0] += fx
             f[j, 1] += fy
-            torque[j] += -aj * ft - mr
         if own_i:
             f[i, 0] -= fx
             f[i, 1] -= fy
             torque[i] += -ai * ft + mr
+        if own_j:
+            torque[j] += -aj * ft - mr
     work[W_EN] = e_n
     work[W_ET] = e_t
     work[W_ER] = e_r
