@@ -127,21 +127,62 @@ def measure_disks(args, comm):
     tm.wrap(d, "add_forces", "disk forces")
     tm.wrap(model, "internal_force", "elements")
     solver.run(steps=20)  # warm-up: JIT caches, first search and sort
+    def phases(d, step):
+        row = {k: d.get(k, 0.0) for k in DISK_PHASES[:3]}
+        row["rest"] = step - sum(row.values())
+        row["full step"] = step
+        return row
+
+    med = sample(solver, tm, args, comm, phases)
+    info = dict(disks=d.n, pairs=int(d.pairs.shape[0]), dt=solver.dt, rebuilds=d.rebuilds)
+    return med, d.by_id(d.x.reshape(-1, 2)).copy(), info
+
+
+def sample(solver, tm, args, comm, phases):
+    """Median time per step [s] of each phase over chunks of ``args.chunk`` steps (the
+    slowest rank's): ``phases(d, step)`` makes a chunk's row from the timers' seconds per
+    step ``d`` and the whole step's ``step``."""
     samples = defaultdict(list)
     for _ in range(max(1, args.steps // args.chunk)):
         before = dict(tm.t)
         comm.barrier()
         t0 = time.perf_counter()
         solver.run(steps=args.chunk)
-        total = time.perf_counter() - t0
-        row = {k: (tm.t[k] - before.get(k, 0.0)) / args.chunk for k in tm.t}
-        row["full step"] = total / args.chunk
-        row["rest"] = row["full step"] - sum(row[k] for k in DISK_PHASES[:3])
-        for k, v in row.items():
+        step = (time.perf_counter() - t0) / args.chunk
+        d = {k: (tm.t[k] - before.get(k, 0.0)) / args.chunk for k in tm.t}
+        for k, v in phases(d, step).items():
             samples[k].append(comm.allreduce(v, op=MPI.MAX))
-    med = {k: statistics.median(v) for k, v in samples.items()}
-    info = dict(disks=d.n, pairs=int(d.pairs.shape[0]), dt=solver.dt, rebuilds=d.rebuilds)
-    return med, d.by_id(d.x.reshape(-1, 2)).copy(), info
+    return {k: statistics.median(v) for k, v in samples.items()}
+
+
+def on_one_and_all(measure_fn, args):
+    """``measure_fn(args, comm)`` on rank 0 alone, then on every rank: {1: result,
+    P: result} on rank 0, None elsewhere."""
+    world = MPI.COMM_WORLD
+    res = {}
+    if world.rank == 0:
+        res[1] = measure_fn(args, MPI.COMM_SELF)
+    world.barrier()
+    if world.size > 1:
+        res[world.size] = measure_fn(args, world)
+    return res if world.rank == 0 else None
+
+
+def print_phases(args, names, med1, medp, size):
+    """The table of the phases' median times on 1 and on ``size`` ranks (``medp`` None
+    on one rank) with the speed-up and the parallel efficiency."""
+    print(f"median time per step over {args.steps} steps in chunks of {args.chunk} "
+          f"(slowest rank)")
+    head = f"{'phase':<17}{'1 rank [us]':>13}"
+    if medp is not None:
+        head += f"{f'{size} ranks [us]':>15}{'speed-up':>10}{'efficiency':>12}"
+    print(head)
+    for k in names:
+        line = f"{k:<17}{1e6 * med1[k]:13.1f}"
+        if medp is not None:
+            line += (f"{1e6 * medp[k]:15.1f}{med1[k] / medp[k]:10.2f}"
+                     f"{med1[k] / (size * medp[k]):12.2f}")
+        print(line)
 
 
 class Timers:
@@ -189,14 +230,7 @@ def measure(args, comm):
     tm.wrap(anchors, "commit", "anchors")
     tm.wrap(model, "internal_force", "elements")
     solver.run(steps=20)  # warm-up: JIT caches, first rebuild
-    samples = defaultdict(list)
-    for _ in range(max(1, args.steps // args.chunk)):
-        before = dict(tm.t)
-        comm.barrier()
-        t0 = time.perf_counter()
-        solver.run(steps=args.chunk)
-        total = time.perf_counter() - t0
-        d = {k: (tm.t[k] - before.get(k, 0.0)) / args.chunk for k in tm.t}
+    def phases(d, step):
         row = {
             "contact search": d.get("contact search", 0.0),
             "contact halo": d.get("contact halo", 0.0),
@@ -205,12 +239,12 @@ def measure(args, comm):
             "joints": d.get("joints", 0.0),
             "anchors": d.get("anchors", 0.0),
             "elements": d.get("elements", 0.0),
-            "full step": total / args.chunk,
+            "full step": step,
         }
-        row["rest"] = row["full step"] - sum(row[k] for k in PHASES[:6])
-        for k, v in row.items():
-            samples[k].append(comm.allreduce(v, op=MPI.MAX))
-    med = {k: statistics.median(v) for k, v in samples.items()}
+        row["rest"] = step - sum(row[k] for k in PHASES[:6])
+        return row
+
+    med = sample(solver, tm, args, comm, phases)
     n = model.n_nodes
     u = model.u.x.array[: 2 * n].reshape(-1, 2)
     rows = np.c_[model.node_block, model.X, u]
@@ -251,33 +285,16 @@ def main():
     for k, v in PRESETS[args.preset].items():
         if getattr(args, k) is None:
             setattr(args, k, v)
-    world = MPI.COMM_WORLD
-    size = world.size
-    res = {}
-    if world.rank == 0:
-        res[1] = measure(args, MPI.COMM_SELF)
-    world.barrier()
-    if size > 1:
-        res[size] = measure(args, world)
-    if world.rank != 0:
+    size = MPI.COMM_WORLD.size
+    res = on_one_and_all(measure, args)
+    if res is None:
         return
     med1, rows1, info = res[1]
     print(f"wall: {info['bricks']} bricks + base, {info['cells']} cells, {info['facets']} "
           f"boundary facets, {info['segments']} joint segments, {info['anchors']} anchors; "
           f"dt = {info['dt']:.3e} s, {info['pairs']} candidate pairs at the end")
-    print(f"median time per step over {args.steps} steps in chunks of {args.chunk} "
-          f"(slowest rank)")
-    head = f"{'phase':<17}{'1 rank [us]':>13}"
-    if size > 1:
-        head += f"{f'{size} ranks [us]':>15}{'speed-up':>10}{'efficiency':>12}"
-    print(head)
     medp = res[size][0] if size > 1 else None
-    for k in PHASES:
-        line = f"{k:<17}{1e6 * med1[k]:13.1f}"
-        if medp is not None:
-            line += (f"{1e6 * medp[k]:15.1f}{med1[k] / medp[k]:10.2f}"
-                     f"{med1[k] / (size * medp[k]):12.2f}")
-        print(line)
+    print_phases(args, PHASES, med1, medp, size)
     contact1 = sum(med1[k] for k in PHASES[:3])
     line = (f"contact phase (search + halo + kernels): {1e6 * contact1:.1f} us on 1 rank, "
             f"{1e9 * contact1 / info['facets']:.1f} ns per facet")
@@ -302,34 +319,17 @@ def main():
 
 def main_disks(args):
     """The ``disks`` preset: measure on rank 0 alone, then on all ranks; print."""
-    world = MPI.COMM_WORLD
-    size = world.size
-    res = {}
-    if world.rank == 0:
-        res[1] = measure_disks(args, MPI.COMM_SELF)
-    world.barrier()
-    if size > 1:
-        res[size] = measure_disks(args, world)
-    if world.rank != 0:
+    size = MPI.COMM_WORLD.size
+    res = on_one_and_all(measure_disks, args)
+    if res is None:
         return
     med1, x1, info = res[1]
     print(f"disks: {info['disks']} disks (jammed packing of benchmarks/disks.py), "
           f"{info['pairs']} candidate pairs, dt = {info['dt']:.3e} s, "
           f"{info['rebuilds']} pair-list builds; every rank holds every disk, the forces "
           "are computed by the ranks owning the disks and gathered")
-    print(f"median time per step over {args.steps} steps in chunks of {args.chunk} "
-          f"(slowest rank)")
-    head = f"{'phase':<17}{'1 rank [us]':>13}"
-    if size > 1:
-        head += f"{f'{size} ranks [us]':>15}{'speed-up':>10}{'efficiency':>12}"
-    print(head)
     medp = res[size][0] if size > 1 else None
-    for k in DISK_PHASES:
-        line = f"{k:<17}{1e6 * med1[k]:13.1f}"
-        if medp is not None:
-            line += (f"{1e6 * medp[k]:15.1f}{med1[k] / medp[k]:10.2f}"
-                     f"{med1[k] / (size * medp[k]):12.2f}")
-        print(line)
+    print_phases(args, DISK_PHASES, med1, medp, size)
     print(f"full step: {1e9 * med1['full step'] / info['disks']:.1f} ns per disk-step on 1 "
           "rank" + (f", {1e9 * medp['full step'] / info['disks']:.1f} on {size}"
                     if medp is not None else ""))
