@@ -111,6 +111,21 @@ def test_fill_case_loads_and_builds():
     assert {p.name for p in model.prescriptions} == {"abutments", "walls", "beam guide"}
     # the limit analysis loads the ring with the fill's weight and the dispersed axle
     assert case.limit_analysis().status == "collapse"
+    # [fill] crossed: the fill's triangles in fours about the centres of quadrilaterals,
+    # the rest of the mesh as before
+    assert not f.crossed
+    crossed = load_case(small(fill__crossed=True))
+    assert crossed.fill.crossed
+    cm, _, _ = build_model(crossed, MPI.COMM_WORLD)
+
+    def cells(m, name):
+        b = m.blocks
+        i = b.block_names.index(name)
+        return b.cells[b.cell_offsets[i]:b.cell_offsets[i + 1]]
+
+    assert len(cells(cm, "fill")) % 4 == 0
+    assert len(cells(cm, "fill")) != len(cells(model, "fill"))
+    assert np.array_equal(cells(cm, "voussoir:0:3").shape, cells(model, "voussoir:0:3").shape)
 
 
 @pytest.mark.parametrize("changes, expected", [

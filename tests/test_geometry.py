@@ -147,6 +147,39 @@ def test_mesh_blocks_many_blocks_and_polygon_validation():
         g.mesh_blocks(polys[:2], materials="a", mesh_size=-1.0)
 
 
+def test_crossed_blocks_are_quadrilaterals_split_by_their_diagonals():
+    """A crossed block: every interior node added is the centre of four triangles, the
+    area is kept, the other blocks are meshed as before; a bad name is refused."""
+    soil = np.array([[0, 0], [2.0, 0], [2.0, 0.7], [1.1, 1.2], [0, 1.0]])
+    brick = np.array([[3, 0], [3.4, 0], [3.4, 0.2], [3, 0.2]], float)
+    plain = g.mesh_blocks([soil, brick], materials="a", names=["soil", "brick"],
+                          mesh_size=0.2)
+    bm = g.mesh_blocks([soil, brick], materials="a", names=["soil", "brick"],
+                       mesh_size=0.2, crossed=["soil"])
+    assert_canonical(bm)
+    assert_boundary_loops(bm)
+    assert bm.block_area == pytest.approx(plain.block_area, rel=REL)
+    cells = bm.cells[bm.cell_offsets[0]:bm.cell_offsets[1]]
+    assert len(cells) % 4 == 0
+    # each node of the crossed block is a vertex of its quadrilaterals (boundary or
+    # interior, any count of triangles) or a centre: in exactly four triangles, whose
+    # other vertices form a quadrilateral with the centre at their vertex average
+    nodes, count = np.unique(cells, return_counts=True)
+    boundary = np.unique(bm.boundary_facets[bm.facet_block == 0])
+    centres = [v for v in nodes[count == 4] if v not in boundary and np.allclose(
+        bm.x[np.unique(cells[np.any(cells == v, axis=1)])].sum(axis=0) - bm.x[v],
+        4.0 * bm.x[v])]
+    assert len(centres) == len(cells) // 4
+    # the brick is meshed as without crossed blocks
+    assert (bm.cell_offsets[2] - bm.cell_offsets[1]) == (plain.cell_offsets[2]
+                                                         - plain.cell_offsets[1])
+    x, tri = g.cross_quads(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float),
+                           np.array([[0, 1, 2, 3]]))
+    assert np.allclose(x[4], [0.5, 0.5]) and tri.shape == (4, 3)
+    with pytest.raises(ValueError, match="crossed: no block"):
+        g.mesh_blocks([soil], materials="a", names=["soil"], crossed=["fill"])
+
+
 def test_gmsh_state_is_left_as_found():
     square = [g.rectangle(0, 0, 1, 1)]
     assert not gmsh.isInitialized()

@@ -300,7 +300,8 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
         hyp = {fill.material: "plane_strain"}
         friction_table = {pair: fill.interface_friction for pair, jm in
                           case.joint_materials().items() if fill.material in pair}
-    mesh = layout.mesh(sizes, comm)
+    mesh = layout.mesh(sizes, comm, crossed=("fill",) if fill is not None and fill.crossed
+                       else ())
     model = Model(mesh, case.materials(), hypotheses=hyp, width=case.arch.width, comm=comm)
     model.fix_blocks("abutment:*", name="abutments")
     if fill is not None:

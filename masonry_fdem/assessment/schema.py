@@ -194,6 +194,7 @@ class FillModel(_Table):
     mesh_size: num("m", optional=True, gt=0.0) = None
     wall_thickness: num("m", "length", gt=0.0) = 0.3
     passive_mobilisation: num("", optional=True, ge=0.0, le=1.0) = None
+    crossed: bool = False
 
 
 class LoadingModel(_Table):

@@ -121,7 +121,10 @@ class FillSpec:
     in plane strain. It touches the extrados, the abutments, the walls and the loading
     beam through a friction-only interface (``interface_friction`` = tan δ, normal
     stiffness ``interface_stiffness`` [Pa/m], shear stiffness kn/2.6) that opens freely.
-    ``mesh_size`` [m] of its triangles; ``wall_thickness`` [m]. In the limit analysis
+    ``mesh_size`` [m] of its triangles; ``crossed``: mesh it with crossed triangles
+    (quadrilaterals split by their diagonals, which do not lock in isochoric plastic flow;
+    :func:`~masonry_fdem.geometry.meshing.mesh_blocks`) instead of a general
+    triangulation; ``wall_thickness`` [m]. In the limit analysis
     (:meth:`ArchCase.limit_analysis`) the fill is RING's: its weight, the load's 2:1
     dispersion, and a horizontal passive resistance of up to ``passive_mobilisation``
     times Rankine's passive pressure on the extrados."""
@@ -133,6 +136,7 @@ class FillSpec:
     mesh_size: float
     wall_thickness: float = 0.3
     passive_mobilisation: float = PASSIVE_MOBILISATION
+    crossed: bool = False
 
     def interface(self) -> JointMaterial:
         """The fill's interface as a friction-only joint material."""

@@ -39,7 +39,7 @@ from masonry_fdem.geometry.layout import (
     stack_layout,
     wall_layout,
 )
-from masonry_fdem.geometry.meshing import mesh_blocks
+from masonry_fdem.geometry.meshing import cross_quads, mesh_blocks
 from masonry_fdem.geometry.msh import interface_rules, read_msh, read_msh_lines, write_msh
 from masonry_fdem.geometry.polygons import as_polygon, polygon_area, polygon_centroid, rectangle
 
@@ -60,6 +60,7 @@ __all__ = [
     "build_block_on_base",
     "build_stack",
     "build_wall",
+    "cross_quads",
     "mesh_blocks",
     "polygon_area",
     "polygon_centroid",

@@ -81,11 +81,13 @@ class BlockLayout:
         allp = np.vstack(self.polygons)
         return np.concatenate([allp.min(axis=0), allp.max(axis=0)])
 
-    def mesh(self, mesh_size: float | None = None, comm: Any | None = None) -> BlockMesh:
-        """Mesh the layout with :func:`mesh_blocks` (see there for ``mesh_size``, ``comm``)."""
+    def mesh(self, mesh_size: float | None = None, comm: Any | None = None,
+             crossed: Sequence[str] = ()) -> BlockMesh:
+        """Mesh the layout with :func:`mesh_blocks` (see there for ``mesh_size``, ``comm``
+        and ``crossed``)."""
         return mesh_blocks(
             self.polygons, materials=self.materials, names=self.names,
-            mesh_size=mesh_size, comm=comm,
+            mesh_size=mesh_size, comm=comm, crossed=crossed,
         )
 
 
