@@ -87,8 +87,22 @@ def test_run_folder_is_complete(dry_runs):
     folder = res.folder
     names = sorted(p.name for p in folder.iterdir())
     assert names == ["curve.csv", "first_hinge.png", "hinges.csv", "hinges.png",
-                     "load_displacement.png", "mechanism.png", "peak_load.png", "report.md",
-                     "summary.json"]
+                     "load_displacement.png", "mechanism.png", "paraview", "peak_load.png",
+                     "report.md", "summary.json"]
+    # the ParaView series: self-weight, every 10th increment and the last, as .vtu files
+    # (and the ADIOS2 .bp series)
+    n = len(res.loads) - 1
+    steps = sorted({0, n} | set(range(0, n + 1, 10)))
+    pvd = (folder / "paraview" / "model.pvd").read_text(encoding="utf-8")
+    assert [float(t) for t in re.findall(r'timestep="([^"]+)"', pvd)] == steps
+    assert (folder / "paraview" / "displacement.bp").is_dir()
+    import meshio
+
+    first, last = (meshio.read(folder / "paraview" / f"model_{k:06d}.vtu")
+                   for k in (0, len(steps) - 1))
+    assert 0 < np.abs(first.point_data["displacement"]).max() < np.abs(
+        last.point_data["displacement"]).max()
+    assert "ParaView: `paraview/model.pvd`" in (folder / "report.md").read_text(encoding="utf-8")
     assert not any(p.name.endswith(".partial") for p in folder.parent.iterdir())
     text = (folder / "report.md").read_text(encoding="utf-8")
     assert f"**Status: peak passed — collapse load {res.collapse_load / 1e3:.2f} kN.**" in text

@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import logging
 import math
+import shutil
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
@@ -717,6 +718,27 @@ def assess(
         open_at_collapse = r["open_at_collapse"]
         anchors_at_collapse = r["anchors_at_collapse"]
 
+    # the ParaView series (collective): the state at the start (self-weight, or where a
+    # resumed run goes on: its own series, the earlier one kept), every `every`
+    # converged increments, and the last
+    every = an.paraview_every
+    vtx = None
+    if write and every > 0:
+        from masonry_fdem.io import VTXOutput
+
+        sub = "paraview" if resumed is None else f"paraview_from_{len(loads) - 1}"
+        if comm.rank == 0:  # (an overwritten run's frames would outnumber this one's)
+            shutil.rmtree(folder / sub, ignore_errors=True)
+        comm.barrier()
+        vtx = VTXOutput(model, folder / sub, joints=monitor.joints)
+        vtx.write(float(len(loads) - 1), velocity=0.0)
+    written = {"last": len(loads) - 1}
+
+    def frame() -> None:
+        if vtx is not None and written["last"] != len(loads) - 1:
+            vtx.write(float(len(loads) - 1), velocity=0.0)
+            written["last"] = len(loads) - 1
+
     def record(load: float, iterations: int) -> None:
         disp = u_sw - _mean_uy(model, load_nodes)
         loads.append(float(load))
@@ -763,6 +785,8 @@ def assess(
                           f"{'converged, past the peak' if past else 'converged'}",
                           load=f"{load / 1e3:.2f} kN", u=f"{disp * 1e3:.3f} mm",
                           open=len({k for k, _ in seen}))
+        if (len(loads) - 1) % max(every, 1) == 0:
+            frame()
         if callback is not None:
             callback({"load": load, "displacement": disp, "iterations": iterations})
         if ck is None and comm.allreduce(stop_requested(), op=MPI.LOR):
@@ -932,6 +956,9 @@ def assess(
         anchor_length=0.0 if anchors is None else anchors.total_length,
         anchor_peaks=list(anchor_peaks.values()),
         ring_separation=[separation[r] for r in sorted(separation)])
+    if vtx is not None:
+        frame()
+        vtx.close()
     result.elapsed = elapsed0 + time.perf_counter() - t_start
     if comm.rank == 0:
         log.info("%s: %s (%s)", case.name, result.status_line, status.detail)

@@ -105,7 +105,10 @@ Schema (``*``: required):
     ``follow_peak`` (true): under load control, when
     an increment finds no equilibrium, go on from the last equilibrium under displacement
     control (steps of ``displacement_increment``, default a quarter of the load-line
-    displacement reached) to find the peak and the post-peak branch.
+    displacement reached) to find the peak and the post-peak branch;
+    ``paraview_every`` (10): the run folder's ParaView series (``paraview/model.pvd`` and
+    the ADIOS2 ``.bp`` files; time = increment number) gets the state under self-weight,
+    every that many converged increments and the last one (0: none).
 ``[checks]``
     ``allow``: keys (``"materials.brick.E"``) whose magnitude checks are switched off.
 ``[[anchors]]``

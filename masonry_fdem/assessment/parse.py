@@ -601,7 +601,8 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
             an.friction if an.friction is not None else (mortar.tan_phi if mortar else 0.6),
             an.dr_rtol, an.max_iterations, Path(an.output or f"runs/{name}"), an.refinements,
             an.hinge_opening, an.penalty_factor, an.post_peak_steps, an.post_peak_drop,
-            an.follow_peak, an.solver, an.newton_rtol, an.newton_iterations, an.newton_steps)
+            an.follow_peak, an.solver, an.newton_rtol, an.newton_iterations, an.newton_steps,
+            an.paraview_every)
     _magnitudes_against_structure(arch, mats, lm, ctx)
     problems = ctx.problems
     if not problems and None in (arch, mortar, ring, loading, analysis):

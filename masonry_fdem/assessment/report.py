@@ -105,7 +105,7 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                               disp))
             finally:
                 model.u.x.array[:] = now
-        hand_over(lambda t: _write_rank0(case, res, t, mag, drawn), tmp, folder, comm)
+        hand_over(lambda t: _write_rank0(case, res, t, mag, drawn, folder), tmp, folder, comm)
     except BaseException:
         if comm.rank == 0:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -127,7 +127,7 @@ def _side(event) -> float:
     return -1.0 if event.side == "extrados" else 1.0
 
 
-def _write_rank0(case, res, tmp: Path, mag: float, drawn=()) -> None:
+def _write_rank0(case, res, tmp: Path, mag: float, drawn=(), folder: Path | None = None) -> None:
     import matplotlib
 
     from masonry_fdem.assessment.assess import status_dict
@@ -172,7 +172,9 @@ def _write_rank0(case, res, tmp: Path, mag: float, drawn=()) -> None:
     save_load_curve(fig, ax, f"{case.name}: {res.control} control", tmp / "load_displacement.png")
 
     _hinges_figure(case, res, tmp / "hinges.png")
-    (tmp / "report.md").write_text(_report(case, res, mag, drawn), encoding="utf-8")
+    paraview = ([] if folder is None else
+                [p.name for p in sorted(folder.glob("paraview*")) if (p / "model.pvd").is_file()])
+    (tmp / "report.md").write_text(_report(case, res, mag, drawn, paraview), encoding="utf-8")
 
 
 def thrust_lines(case, la) -> list[list[tuple[float, float]]]:
@@ -327,7 +329,7 @@ def status_text(res) -> str:
     return f"{res.status_line} ({d})" if d else res.status_line
 
 
-def _report(case, res, mag: float, drawn=()) -> str:
+def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     a, ld = case.arch, case.loading
     kn = res.peak_load / 1e3
     lines = [f"# Assessment of `{case.name}`", "", f"**Status: {res.status_line}.**", ""]
@@ -410,7 +412,11 @@ def _report(case, res, mag: float, drawn=()) -> str:
               *[x for name, file, load, disp in drawn for x in (
                   "", f"At the {name}: {load / 1e3:.2f} kN, {disp * 1e3:.3f} mm "
                   "load-line displacement.", "", f"![{name}]({file})")],
-              "", "Files: `curve.csv`, `hinges.csv`, `summary.json`.", ""]
+              "", "Files: `curve.csv`, `hinges.csv`, `summary.json`"
+              + (f"; ParaView: {', '.join(f'`{p}/model.pvd`' for p in paraview)} (and the "
+                 "ADIOS2 `.bp` series beside it; time = increment number, every "
+                 f"{case.analysis.paraview_every} increments and the last)"
+                 if paraview else "") + ".", ""]
     return "\n".join(lines)
 
 

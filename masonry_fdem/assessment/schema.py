@@ -260,6 +260,7 @@ class AnalysisModel(_Table):
     newton_rtol: num("", gt=0.0) = 1e-6
     newton_iterations: integer(ge=1) = 25
     newton_steps: integer(ge=1) = 400
+    paraview_every: integer(ge=0) = 10
 
 
 class SteelModel(_Table):

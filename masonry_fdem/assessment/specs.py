@@ -191,6 +191,7 @@ class AnalysisSpec:
     newton_rtol: float = 1e-6
     newton_iterations: int = 25
     newton_steps: int = 400
+    paraview_every: int = 10
 
 
 @dataclass(frozen=True)
