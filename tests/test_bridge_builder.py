@@ -180,6 +180,27 @@ def test_bridge_case_file_loads():
     assert c.interface.kn == pytest.approx(20 * 50e6 / 0.2)
     assert isinstance(c.materials["soil"], MohrCoulomb)
     assert c.vehicle.axles(3.0) == [(3.9, 0.5), (2.1, 0.5)]
+    assert not c.crossed
+    # [bridge.mesh] crossed: the fill, the surfacing and the soil in crossed triangles
+    # (fours about the centres of quadrilaterals), the masonry as before
+    d = _case()
+    d["bridge"]["mesh"]["crossed"] = True
+    cx = load_bridge_case(d)
+    assert cx.crossed
+    plain, _, _ = bridge_model(b, c.materials, c.mortar, c.interface, c.vehicle, 3.0,
+                               mesh_size=c.mesh, comm=MPI.COMM_SELF)
+    crossed, _, _ = bridge_model(b, cx.materials, cx.mortar, cx.interface, cx.vehicle, 3.0,
+                                 mesh_size=cx.mesh, crossed=True, comm=MPI.COMM_SELF)
+
+    def n_cells(m, name):
+        bm = m.blocks
+        i = bm.block_names.index(name)
+        return int(bm.cell_offsets[i + 1] - bm.cell_offsets[i])
+
+    for name in ("fill", "surfacing", "soil"):
+        assert n_cells(crossed, name) % 4 == 0 and n_cells(crossed, name) != n_cells(plain,
+                                                                                       name)
+    assert n_cells(crossed, "pier:0") == n_cells(plain, "pier:0")
 
 
 def _case(**changes) -> dict:

@@ -91,6 +91,7 @@ def bridge_model(
     *,
     mesh_size: float | Mapping[str, float] = 0.2,
     penalty_factor: float | None = None,
+    crossed: bool = False,
     comm: MPI.Comm = MPI.COMM_WORLD,
 ):
     """The FDEM model of ``bridge`` with ``vehicle`` at ``x`` (collective).
@@ -107,6 +108,9 @@ def bridge_model(
         mesh_size: element size [m], one value or per part name ("masonry", "pier",
             "fill", "surfacing", "soil", "wall").
         penalty_factor: contact penalty factor (default: the contact's own).
+        crossed: mesh the fill, the surfacing and the soil with crossed triangles
+            (quadrilaterals split by their diagonals: no locking in their isochoric
+            plastic flow; :func:`~masonry_fdem.geometry.meshing.mesh_blocks`).
 
     Returns:
         ``(model, [contact, joints], axles)``: ``axles`` the ``(x, share)`` per axle.
@@ -137,7 +141,8 @@ def bridge_model(
         sizes = [float(mesh_size)] * len(lay)
     sizes = [0.5 * BEAM[0] if n.startswith("beam:") else s
              for n, s in zip(lay.names, sizes, strict=True)]
-    mesh = lay.mesh(sizes, comm)
+    soils = [n for n in lay.names if n in ("fill", "surfacing", "soil")]
+    mesh = lay.mesh(sizes, comm, crossed=soils if crossed else ())
     continua = {m["fill"], m["surfacing"], m["soil"]}
     hyp = {name: "plane_strain" for name in continua if name in lay.materials}
     model = Model(mesh, mats, hypotheses=hyp, width=bridge.width, comm=comm)

@@ -21,6 +21,7 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
     tan_phi = 0.43                # default tan(2/3 φ_fill)
     kn = 5e9                      # [Pa/m] default 20 E_fill / fill mesh size
     [bridge.mesh]                 # [m] element sizes per part
+    crossed = false               # fill, surfacing, soil in crossed triangles (no locking)
     [materials.stone] ...         # density, E, nu (and c, phi, psi: Mohr–Coulomb)
     [joints.mortar] ...           # the masonry's joints
     [vehicle]
@@ -86,6 +87,7 @@ class BridgeCase:
     positions: tuple[float, ...]
     mesh: dict[str, float]
     analysis: dict[str, float] = field(default_factory=dict)
+    crossed: bool = False
 
     @numerical_failures("the bridge run")
     def run(self, x: float, comm: MPI.Comm = MPI.COMM_WORLD):
@@ -93,7 +95,8 @@ class BridgeCase:
         (collective). Returns ``(model, BridgeRun)``."""
         model, inter, axles = bridge_model(self.bridge, self.materials, self.mortar,
                                            self.interface, self.vehicle, x,
-                                           mesh_size=self.mesh, comm=comm)
+                                           mesh_size=self.mesh, crossed=self.crossed,
+                                           comm=comm)
         run: BridgeRun = load_bridge(model, inter, axles, self.interface,
                                      self.bridge.road_level(), comm=comm, **self.analysis)
         return model, run
@@ -205,4 +208,4 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
         raise CaseError(list(dict.fromkeys(problems)), label)  # each line once
     assert bridge is not None and mortar is not None and vehicle is not None
     return BridgeCase(name, bridge, mats, mortar, interface, vehicle, positions, mesh,
-                      analysis)
+                      analysis, bool(bm.mesh.crossed))

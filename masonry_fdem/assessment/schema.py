@@ -551,6 +551,7 @@ class BridgeMeshModel(_Table):
     fill: num("m", optional=True, gt=0.0) = None
     surfacing: num("m", optional=True, gt=0.0) = None
     soil: num("m", optional=True, gt=0.0) = None
+    crossed: bool = False
 
 
 class BridgeModel(_Table):
