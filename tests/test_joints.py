@@ -151,6 +151,18 @@ def test_bonded_wall_at_rest_stays_intact():
     assert counts["intact"] == joints.n_segments > 20
     sn = joints.tractions()[:, 0]
     assert sn.max() < 0.05 * mortar.ft
+    # the joints under the bottom course carry the wall's weight down onto the base
+    from masonry_fdem.constants import G
+
+    units = np.setdiff1d(np.arange(blocks.n_blocks), blocks.select("base"))
+    weight = 1800.0 * 0.1 * G * blocks.block_area[units].sum()
+    pts, f = joints.forces_on("base")
+    assert np.allclose(pts[:, 1], 0.0) and len(pts) >= 2 * 3
+    assert f[:, 1].sum() == pytest.approx(-weight, rel=1e-4)
+    assert abs(f[:, 0].sum()) < 1e-4 * weight
+    # and the same forces, reversed, on the bricks from the base
+    pts_b, f_b = joints.forces_on(list(np.array(blocks.block_names)[units]), by="base")
+    assert np.allclose(f_b.sum(axis=0), -f.sum(axis=0), rtol=1e-9, atol=1e-9 * weight)
 
 
 def test_missing_joint_material_is_named():

@@ -523,7 +523,9 @@ def assess(
         comm: MPI communicator.
         write: write the run folder (False: compute only).
         callback: called on every rank after each converged step with
-            ``{"load": N, "displacement": m, "iterations": int}``.
+            ``{"load": N, "displacement": m, "iterations": int, "model": the Model,
+            "interactions": [BlockContact, Joints]}`` (the model at that equilibrium: read
+            it, e.g. ``Joints.forces_on``; collective calls on every rank).
         resume: go on from the checkpoint in the run folder (same case, same number of
             ranks) instead of starting afresh; the result is the one the run would have
             given (bit for bit).
@@ -788,7 +790,8 @@ def assess(
         if (len(loads) - 1) % max(every, 1) == 0:
             frame()
         if callback is not None:
-            callback({"load": load, "displacement": disp, "iterations": iterations})
+            callback({"load": load, "displacement": disp, "iterations": iterations,
+                      "model": model, "interactions": inter})
         if ck is None and comm.allreduce(stop_requested(), op=MPI.LOR):
             raise Interrupted(folder, len(loads) - 1, (
                 f"interrupted: {case.name} stopped at step {len(loads) - 1}; dynamic "

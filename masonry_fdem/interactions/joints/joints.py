@@ -643,6 +643,49 @@ class Joints(Interaction):
         st = self.status()
         return {name: int(np.sum(st == k)) for k, name in enumerate(JOINT_STATES)}
 
+    def forces_on(self, on, by=None) -> tuple[np.ndarray, np.ndarray]:
+        """The forces [N] that the bonded points between the blocks ``by`` and the blocks
+        ``on`` exert on ``on``, at the current displacement (collective).
+
+        Args:
+            on, by: blocks as :meth:`~masonry_fdem.geometry.BlockMesh.select` takes them
+                (names, shell patterns, a centroid predicate); ``by`` None: every other
+                block.
+
+        Returns:
+            ``(points, forces)``: ``(k, 2)`` reference positions [m] of the integration
+            points and ``(k, 2)`` the force each puts on its ``on`` side (x, y), in global
+            point order on every rank. Points handed over to the block contact carry no
+            joint force and are left out.
+        """
+        bm = self.model.blocks
+        a = np.zeros(bm.n_blocks, dtype=bool)
+        a[bm.select(on)] = True
+        b = ~a if by is None else np.zeros(bm.n_blocks, dtype=bool)
+        if by is not None:
+            b[bm.select(by)] = True
+        # the trial forces of the current displacement, as add_forces computes them
+        nloc = 2 * self.n_local_nodes
+        self.u[:nloc] = self.model.u.x.array[:nloc]
+        if self.exchange is not None:
+            self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
+            self.u[nloc:] = self._ghost_u.ravel()
+        JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
+                        self.ipmat, self.props, self.alive, self.counted, self.s0, self.s1,
+                        self.fq, self.energy)
+        sb = self.seg_blocks[self.q_seg[self.local_ip]]
+        on_a = a[sb[:, 0]] & b[sb[:, 1]]
+        on_b = a[sb[:, 1]] & b[sb[:, 0]]
+        # each point once (the rank that counts it), alive
+        keep = (on_a | on_b) & (self.counted > 0) & (self.alive > 0)
+        f = np.where(on_a[:, None], self.fq[:, 0:4].reshape(-1, 2, 2).sum(axis=1),
+                     self.fq[:, 4:8].reshape(-1, 2, 2).sum(axis=1))
+        parts = self.comm.allgather((self.local_ip[keep], f[keep]))
+        idx = np.concatenate([p[0] for p in parts]).astype(np.int64)
+        order = np.argsort(idx, kind="stable")
+        forces = np.concatenate([p[1] for p in parts]).reshape(-1, 2)[order]
+        return self.point_positions()[idx[order]], forces
+
     def tractions(self) -> np.ndarray:
         """(n_points, 2) committed normal and shear traction [Pa] (tension > 0)."""
         return self._gather([JK.S_SN, JK.S_TS])
