@@ -93,12 +93,14 @@ for k in range(comm.rank, len(positions), comm.size):
           f"{bare.status_line} ({time.perf_counter() - t:.0f} s)", flush=True)
 rows = sorted((r for part in comm.allgather(rows) for r in part), key=lambda r: r["position"])
 
-def _lp_sweep(xs: np.ndarray, passive: bool) -> np.ndarray:
-    """Limit load [N] with fill at each position (NaN where the LP finds no mechanism)."""
+def _lp_sweep(xs: np.ndarray, passive: bool, incline: bool = False) -> np.ndarray:
+    """Limit load [N] with fill at each position (NaN where the LP finds no mechanism);
+    ``incline``: the fill's loads on chords steeper than its interface friction lean
+    uphill by the excess."""
     out = []
     for pos in xs:
         res = replace(case, loading=replace(case.loading, position=float(pos))).limit_analysis(
-            passive=passive)
+            passive=passive, incline=incline)
         out.append(res.load_factor if res.status == "collapse" else np.nan)
     return np.array(out)
 
@@ -113,6 +115,8 @@ def _critical(xs: np.ndarray, loads: np.ndarray) -> str:
 if comm.rank == 0:
     fine = np.round(np.arange(0.05, 0.5001, 0.025), 3)
     lp_fine, lp_none = _lp_sweep(fine, True), _lp_sweep(fine, False)
+    lp_lean = _lp_sweep(fine, True, incline=True)
+    lean_at = _lp_sweep(np.array([r["position"] for r in rows]), True, incline=True)
     proved = [r for r in rows if r["collapsed"]]
     crit = min(proved, key=lambda r: r["load"]) if proved else None
     lines = [f"# {case.name}: collapse load against the axle's position", "",
@@ -120,16 +124,19 @@ if comm.rank == 0:
              f"rank(s). Loads per {case.arch.width:g} m of barrel width. LP: the rigid-block "
              "limit analysis of the same ring — bare, and with the fill as RING models it "
              "(its weight over the extrados, the axle dispersed 2:1, a passive resistance "
-             f"up to {case.fill.passive_mobilisation:g} of Rankine's).",
+             f"up to {case.fill.passive_mobilisation:g} of Rankine's); \"loads leaning\": "
+             "the same with the fill's loads on the extrados leaning uphill where it is "
+             "steeper than the fill's interface friction angle, by the excess.",
              "", "| position / span | with fill [kN] | [t] | status | LP with fill [kN] | "
-             "bare ring [kN] | LP bare [kN] | fill / bare |",
-             "|---|---|---|---|---|---|---|---|"]
-    for r in rows:
+             "LP, loads leaning [kN] | bare ring [kN] | LP bare [kN] | fill / bare |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r, lean in zip(rows, lean_at, strict=True):
         mark = "" if r["collapsed"] else "≥ "
         bmark = "" if r["bare_collapsed"] else "≥ "
         lines.append(f"| {r['position']:g} | {mark}{r['load'] / 1e3:.1f} | "
                      f"{mark}{r['load'] / TONNE:.2f} | {r['status']} | "
                      f"{_lp(r['limit_fill'], r['limit_fill_status'])} | "
+                     f"{f'{lean / 1e3:.1f}' if np.isfinite(lean) else 'no mechanism'} | "
                      f"{bmark}{r['bare'] / 1e3:.2f} | "
                      f"{(r['limit'] or float('nan')) / 1e3:.2f} | "
                      f"{r['load'] / r['bare']:.2f} |")
@@ -144,7 +151,8 @@ if comm.rank == 0:
     lines += ["", f"Limit analysis with fill on a grid of {fine.size} positions (rigid ring, "
               "seconds): critical position " + _critical(fine, lp_fine) + f" with passive "
               f"resistance (m = {case.fill.passive_mobilisation:g}); "
-              + _critical(fine, lp_none) + " without."]
+              + _critical(fine, lp_none) + " without; " + _critical(fine, lp_lean)
+              + " with the loads leaning."]
     text = "\n".join(lines) + "\n"
     (out / "sweep.md").write_text(text, encoding="utf-8")
     print(text)
@@ -169,6 +177,8 @@ if comm.rank == 0:
             label=f"limit analysis with fill (passive × {case.fill.passive_mobilisation:g})")
     ax.plot(fine, lp_none / 1e3, ":", color="C2", lw=1.2,
             label="limit analysis with fill, no passive")
+    ax.plot(fine, lp_lean / 1e3, "-.", color="C4", lw=1.2,
+            label="limit analysis with fill, loads leaning")
     if crit is not None:
         ax.axvline(crit["position"], color="0.5", ls=":", lw=1)
     ax.set_xlabel("axle position / span")

@@ -257,7 +257,8 @@ def _parse_fill(m: S.FillModel, mats: Mapping[str, Material], arch: ArchSpec | N
     kn = m.interface_stiffness if m.interface_stiffness is not None else 20.0 * fm.E / size
     passive = (m.passive_mobilisation if m.passive_mobilisation is not None
                else PASSIVE_MOBILISATION)
-    return FillSpec(m.cover, mat, mu, kn, size, m.wall_thickness, passive, m.crossed)
+    return FillSpec(m.cover, mat, mu, kn, size, m.wall_thickness, passive, m.crossed,
+                    m.incline_loads)
 
 
 def _parse_loading(m: S.LoadingModel, span: float | None, ctx: _Ctx) -> LoadingSpec | None:

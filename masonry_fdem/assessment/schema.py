@@ -195,6 +195,7 @@ class FillModel(_Table):
     wall_thickness: num("m", "length", gt=0.0) = 0.3
     passive_mobilisation: num("", optional=True, ge=0.0, le=1.0) = None
     crossed: bool = False
+    incline_loads: bool = False
 
 
 class LoadingModel(_Table):

@@ -127,7 +127,9 @@ class FillSpec:
     triangulation; ``wall_thickness`` [m]. In the limit analysis
     (:meth:`ArchCase.limit_analysis`) the fill is RING's: its weight, the load's 2:1
     dispersion, and a horizontal passive resistance of up to ``passive_mobilisation``
-    times Rankine's passive pressure on the extrados."""
+    times Rankine's passive pressure on the extrados; ``incline_loads``: the loads on
+    chords steeper than the interface's friction angle lean uphill by the excess
+    (:func:`~masonry_fdem.geometry.fill.fill_loads`)."""
 
     cover: float
     material: str
@@ -137,6 +139,7 @@ class FillSpec:
     wall_thickness: float = 0.3
     passive_mobilisation: float = PASSIVE_MOBILISATION
     crossed: bool = False
+    incline_loads: bool = False
 
     def interface(self) -> JointMaterial:
         """The fill's interface as a friction-only joint material."""
@@ -570,7 +573,7 @@ class ArchCase:
             return replace(base, ft=base.ft * factor, c=base.c * factor,
                            fc=None if base.fc is None else base.fc * factor)
 
-    def limit_analysis(self, passive: bool = True, **kw: Any):
+    def limit_analysis(self, passive: bool = True, incline: bool | None = None, **kw: Any):
         """Rigid-block collapse load of the case by
         :func:`~masonry_fdem.solvers.limit_analysis.limit_analysis`: the live load is 1 N shared by
         :meth:`extrados_load_points`, so the load factor is the collapse load [N]. With
@@ -578,8 +581,11 @@ class ArchCase:
         its weight over the extrados, the live load dispersed 2:1 down to the extrados, and
         its passive resistance to a ring that sways into it, up to ``passive_mobilisation``
         times Rankine's (:func:`~masonry_fdem.geometry.fill.fill_passive`; the fill's
-        cohesion included). ``passive=False`` leaves the passive resistance out. Keywords
-        override the arguments (e.g. ``friction``)."""
+        cohesion included). ``passive=False`` leaves the passive resistance out.
+        ``incline`` (default ``[fill] incline_loads``, false): the fill's loads on chords of
+        the extrados steeper than its interface friction angle δ lean uphill by the excess
+        (the fill's traction can lean at most δ from the extrados' normal; RING takes them
+        vertical). Keywords override the arguments (e.g. ``friction``)."""
         from masonry_fdem.solvers.limit_analysis import limit_analysis
 
         pts = self.extrados_load_points()
@@ -591,9 +597,11 @@ class ArchCase:
             from masonry_fdem.geometry.fill import fill_loads
 
             rho = self.material_table[self.fill.material].density
+            lean = self.fill.incline_loads if incline is None else incline
             dead, live = fill_loads(
                 self.layout(), road=self.road_level(), unit_weight=rho * G * self.arch.width,
-                patch=(self.load_x(), self.loading.spreader_width))
+                patch=(self.load_x(), self.loading.spreader_width),
+                interface_friction=self.fill.interface_friction if lean else None)
             if not self.loading.self_weight:
                 dead = []
             fm = self.material_table[self.fill.material]

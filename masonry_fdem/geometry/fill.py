@@ -9,6 +9,7 @@ of a real bridge lie outside the plane and are not modelled. Units: metres.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -147,6 +148,7 @@ def fill_loads(
     unit_weight: float,
     patch: tuple[float, float],
     spread: float = 0.5,
+    interface_friction: float | None = None,
 ) -> tuple[list, list]:
     """The fill as loads on a rigid-block arch, for limit analysis (the way RING treats
     fill without its passive resistance): the weight of the fill column over each chord of
@@ -159,10 +161,16 @@ def fill_loads(
         patch: (x centre, width) [m] of the load on the road (width > 0).
         spread: horizontal spread per unit depth on each side (0.5: the 2:1 rule, a
             dispersion angle of 26.6° from the vertical).
+        interface_friction: tan δ of the fill on the extrados, or None (RING: every load
+            vertical). Given, a chord steeper than δ (inclined at θ > δ) takes its loads
+            inclined by θ − δ from the vertical, uphill (towards the crown): the fill's
+            traction on it can lean at most δ from its normal. The vertical parts are
+            unchanged.
 
     Returns:
-        ``(dead, live)``: ``((x, y), (0, −F))`` point loads [N] on the extrados, the dead
-        ones the fill's weight, the live ones summing to 1 N.
+        ``(dead, live)``: ``((x, y), (Fx, −F))`` point loads [N] on the extrados, the dead
+        ones the fill's weight, the live ones' vertical parts summing to 1 N (Fx = 0 unless
+        ``interface_friction`` is given).
     """
     x0, b = float(patch[0]), float(patch[1])
     if not b > 0:
@@ -170,6 +178,8 @@ def fill_loads(
     xs = extrados_vertices(structure)[:, 0]
     dead, live = [], []
     weights = []
+    lean = []  # per chord with live load: Fx / |Fy|
+    delta = None if interface_friction is None else math.atan(float(interface_friction))
     for xa, xb in zip(xs[:-1], xs[1:], strict=True):
         t = np.linspace(xa, xb, 9)
         y = upper_envelope(structure, t, "voussoir:")
@@ -177,18 +187,24 @@ def fill_loads(
         area = np.trapezoid(depth, t)
         xc = float(np.trapezoid(depth * t, t) / area) if area > 0 else 0.5 * (xa + xb)
         yc = float(upper_envelope(structure, np.array([xc]), "voussoir:")[0])
+        tilt = 0.0
+        if delta is not None:
+            ya, yb = upper_envelope(structure, np.array([xa, xb]), "voussoir:")
+            theta = math.atan(abs(yb - ya) / (xb - xa))
+            tilt = math.copysign(math.tan(max(0.0, theta - delta)), yb - ya)
         if area > 0:
-            dead.append(((xc, yc), (0.0, -unit_weight * area)))
+            dead.append(((xc, yc), (tilt * unit_weight * area, -unit_weight * area)))
         # the dispersed patch at this chord's depth: [x0 - b/2 - s h, x0 + b/2 + s h]
         h = float(road - yc)
         half = 0.5 * b + spread * h
         lo, hi = max(xa, x0 - half), min(xb, x0 + half)
         if hi > lo:
             weights.append(((xc, yc), (hi - lo) / (2.0 * half)))
+            lean.append(tilt)
     total = sum(w for _, w in weights)
     if total <= 0:
         raise ValueError(f"the load patch at x = {x0:g} m disperses onto no voussoir")
-    live = [(p, (0.0, -w / total)) for p, w in weights]
+    live = [(p, (t * w / total, -w / total)) for (p, w), t in zip(weights, lean, strict=True)]
     return dead, live
 
 
