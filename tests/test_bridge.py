@@ -262,7 +262,7 @@ def test_fill_loads_lean_on_chords_steeper_than_the_interface_friction():
     """With the interface friction given, a chord of the extrados inclined at θ > δ takes
     its loads inclined by θ − δ from the vertical, uphill (towards the crown); flatter
     chords keep them vertical; the vertical parts are those of RING's model. On the 6 m
-    bridge of the demo (δ = 2φ/3 = 23.3°, extrados up to 46° at the springing) the LP with
+    bridge of the demo (δ = 2φ/3 = 23.3°, extrados up to 53° at the springing) the LP with
     leaning loads falls most near the springing (measured: at 0.1 of the span 229.6 against
     354.5 kN, at quarter span 243.2 against 251.1 kN)."""
     case = load_case(small())
