@@ -34,7 +34,12 @@ def footing_model(n: int = 8, comm=MPI.COMM_WORLD) -> Model:
     x, cells = crossed_grid(xs, ys)
     blocks = BlockMesh.from_arrays(x, cells, np.zeros(len(cells), dtype=np.int64),
                                    block_names=["soil"], material_names=["clay"])
-    m = Model(blocks, {"clay": CLAY}, hypothesis="plane_strain", width=1.0, comm=comm)
+    return _supported(Model(blocks, {"clay": CLAY}, hypothesis="plane_strain", width=1.0,
+                            comm=comm))
+
+
+def _supported(m: Model) -> Model:
+    """The half problem's supports (base, far side, symmetry) and the footing."""
     tol = 1e-9
     m.fix(lambda X: np.isclose(X[1], -4 * B2, atol=tol), name="base")
     m.fix(lambda X: np.isclose(X[0], 5 * B2, atol=tol), components=(0,), name="far side")
@@ -83,16 +88,8 @@ def _gmsh_footing(crossed: bool, h: float = 0.05, comm=MPI.COMM_WORLD) -> Model:
 
     outline = np.array([(0.0, -4 * B2), (5 * B2, -4 * B2), (5 * B2, 0.0), (B2, 0.0), (0.0, 0.0)])
     lay = BlockLayout((outline,), ("clay",), ("soil",))
-    m = Model(lay.mesh(h, comm, crossed=("soil",) if crossed else ()), {"clay": CLAY},
-              hypothesis="plane_strain", width=1.0, comm=comm)
-    tol = 1e-9
-    m.fix(lambda X: np.isclose(X[1], -4 * B2, atol=tol), name="base")
-    m.fix(lambda X: np.isclose(X[0], 5 * B2, atol=tol), components=(0,), name="far side")
-    m.fix(lambda X: np.isclose(X[0], 0.0, atol=tol) & (X[1] < -tol), components=(0,),
-          name="symmetry")
-    m.prescribe_nodes(lambda X: np.isclose(X[1], 0.0, atol=tol) & (X[0] <= B2 + tol),
-                      (None, 0.0), name="footing")
-    return m
+    return _supported(Model(lay.mesh(h, comm, crossed=("soil",) if crossed else ()),
+                            {"clay": CLAY}, hypothesis="plane_strain", width=1.0, comm=comm))
 
 
 def test_gmsh_crossed_mesh_does_not_lock_where_a_triangulation_does():

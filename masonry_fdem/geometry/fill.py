@@ -189,9 +189,9 @@ def fill_loads(
         yc = float(upper_envelope(structure, np.array([xc]), "voussoir:")[0])
         tilt = 0.0
         if delta is not None:
-            ya, yb = upper_envelope(structure, np.array([xa, xb]), "voussoir:")
-            theta = math.atan(abs(yb - ya) / (xb - xa))
-            tilt = math.copysign(math.tan(max(0.0, theta - delta)), yb - ya)
+            rise = float(y[-1] - y[0])  # the chord's ends (t runs from xa to xb)
+            theta = math.atan(abs(rise) / (xb - xa))
+            tilt = math.copysign(math.tan(max(0.0, theta - delta)), rise)
         if area > 0:
             dead.append(((xc, yc), (tilt * unit_weight * area, -unit_weight * area)))
         # the dispersed patch at this chord's depth: [x0 - b/2 - s h, x0 + b/2 + s h]

@@ -489,18 +489,22 @@ class Joints(Interaction):
         """Bound of Σ_j |K_ij| [N/m] of the joint springs into the block rows."""
         rows[BLOCKS] += np.repeat(2.0 * math.sqrt(2.0) * self._local_node_bound(), 2)
 
-    def add_forces(self, state: State) -> None:
-        """Add the joint forces [N] at the current displacement (trial state; collective)."""
-        f = state.f[BLOCKS]
+    def _point_forces(self, u: np.ndarray) -> None:
+        """Each point's forces into ``fq`` at the block displacements ``u`` (this rank's
+        nodes; the ghosts' exchanged; trial state; collective)."""
         nloc = 2 * self.n_local_nodes
-        self.u[:nloc] = state.u[BLOCKS][:nloc]
+        self.u[:nloc] = u[:nloc]
         if self.exchange is not None:
             self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
             self.u[nloc:] = self._ghost_u.ravel()
         JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
                         self.ipmat, self.props, self.alive, self.counted, self.s0, self.s1,
                         self.fq, self.energy)
-        gather_rows(self.fq, self._gnodes, self._gptr, self._gidx, f)
+
+    def add_forces(self, state: State) -> None:
+        """Add the joint forces [N] at the current displacement (trial state; collective)."""
+        self._point_forces(state.u[BLOCKS])
+        gather_rows(self.fq, self._gnodes, self._gptr, self._gidx, state.f[BLOCKS])
 
     def add_tangent(self, K: Tangent, state: State) -> None:
         """The consistent tangent −∂f/∂u [N/m] of the live integration points into ``K``
@@ -664,15 +668,7 @@ class Joints(Interaction):
         b = ~a if by is None else np.zeros(bm.n_blocks, dtype=bool)
         if by is not None:
             b[bm.select(by)] = True
-        # the trial forces of the current displacement, as add_forces computes them
-        nloc = 2 * self.n_local_nodes
-        self.u[:nloc] = self.model.u.x.array[:nloc]
-        if self.exchange is not None:
-            self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
-            self.u[nloc:] = self._ghost_u.ravel()
-        JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
-                        self.ipmat, self.props, self.alive, self.counted, self.s0, self.s1,
-                        self.fq, self.energy)
+        self._point_forces(self.model.u.x.array)  # as add_forces computes them
         sb = self.seg_blocks[self.q_seg[self.local_ip]]
         on_a = a[sb[:, 0]] & b[sb[:, 1]]
         on_b = a[sb[:, 1]] & b[sb[:, 0]]
