@@ -20,6 +20,7 @@ from masonry_fdem.interactions.anchors import (
     Anchors,
     BondLaw,
     DowelLaw,
+    JointDowel,
     SteelLaw,
     straight_anchor,
     wall_ties,
@@ -214,6 +215,57 @@ def test_open_joint_load_opening_curve_follows_the_bond_law():
         assert force == pytest.approx(anchors.axial_force().max(), rel=1e-3)
     print(f"load-opening curve within {worst:.2e} of the peak")
     assert worst < 0.01
+
+
+@pytest.mark.parametrize("comm", [MPI.COMM_SELF, MPI.COMM_WORLD], ids=["self", "world"])
+def test_sliding_joint_is_held_by_the_dowel_of_the_bar_across_it(comm):
+    """B slides along the dry joint (no normal force, so no friction) across a bar with a
+    joint dowel K = 1e8 N/m, Q_y = 500 N: the force holding B is K δ, then Q_y on the
+    plateau, and on unloading Q_y − K (δ_max − δ) (elastic-perfectly plastic, plastic slip
+    kept); the dowel's own output agrees. Without the dowel the bar (a truss) holds B
+    by nothing but the kink of its crossing element: under 1 % of those forces. On one
+    rank and on all (A and B on different ranks under mpirun)."""
+    k, qy = 1e8, 500.0
+    model, anchors, dr = two_blocks_across_a_dry_joint(
+        {"shear": JointDowel(stiffness=k, strength=qy)}, comm=comm)
+    assert anchors.n_cross == 1
+    _, bare, dr0 = two_blocks_across_a_dry_joint({}, comm=comm)
+    assert bare.n_cross == 0
+    expected = {2e-6: k * 2e-6, 4e-6: k * 4e-6, 8e-6: qy, 1.2e-5: qy, 1e-5: qy - k * 2e-6,
+                6e-6: qy - k * 6e-6}
+    for delta, ref in expected.items():
+        assert dr.solve(0.0, displacement={"B": (0.0, delta)}).converged
+        force = dr.reactions()["B"][1]  # what holds B up against the dowel
+        res = anchors.dowel_results()
+        print(f"delta {delta * 1e6:.0f} um: holding force {force:.2f} N (expected {ref:.2f}), "
+              f"dowel {res['force'][0]:.2f} N")
+        assert force == pytest.approx(ref, rel=1e-3, abs=1e-3 * qy)
+        assert abs(res["force"][0]) == pytest.approx(abs(ref), rel=1e-3, abs=1e-3 * qy)
+        if delta == 1.2e-5:
+            assert bool(res["plastic"][0])
+        assert dr0.solve(0.0, displacement={"B": (0.0, delta)}).converged
+        assert abs(dr0.reactions()["B"][1]) < 0.01 * qy
+
+
+def test_joint_dowel_from_the_bar_and_its_bedding():
+    """JointDowel.from_bar against the formulas it cites, evaluated here step by step for
+    an M16 stainless bar (d = 14.1 mm, E = 200 GPa, f_y = 450 MPa) in 12 MPa masonry:
+    Soroushian's subgrade coefficient 127·0.8·√12/14.1^(2/3) = 60.3 N/mm³, Hetényi's
+    K = k/(4λ), and V_u = 1.3 d² √(f_c f_y) = 19.0 kN (below f_y A/√3 = 40.5 kN)."""
+    d, E, fy, fc = 0.0141, 200e9, 450e6, 12e6
+    j = JointDowel.from_bar(d, E, fy, fc)
+    kc = 127 * 0.8 * math.sqrt(12.0) / 14.1 ** (2 / 3)  # N/mm³
+    assert kc == pytest.approx(60.3, abs=0.1)
+    k = kc * 1e9 * d
+    lam = (k / (4 * E * math.pi * d**4 / 64)) ** 0.25
+    assert j.stiffness == pytest.approx(k / (4 * lam), rel=1e-12)
+    assert j.strength == pytest.approx(19.0e3, rel=2e-3)
+    assert JointDowel.from_bar(d, E, 100e6, 500e6).strength == pytest.approx(
+        100e6 * math.pi * d**2 / 4 / math.sqrt(3), rel=1e-12)  # the bar's shear yield
+    with pytest.raises(ValueError):
+        JointDowel.from_bar(d, E, fy, -1.0)
+    with pytest.raises(TypeError):
+        Anchor([[0, 0], [1, 0]], diameter=0.01, shear=DowelLaw(stiffness=1e9))
 
 
 def test_prestressed_anchor_puts_the_blocks_in_compression():

@@ -300,6 +300,32 @@ def test_radial_anchors_lie_inside_the_ring_band():
         np.testing.assert_allclose(np.degrees(np.arctan2(a.points[:, 1], a.points[:, 0])), ang)
         assert a.count == 2 and a.steel.yield_stress == 460e6 and a.bond.strength == 2e6
     np.testing.assert_allclose(np.linalg.norm(anchors[-1].points, axis=1), 1.665)
+    assert all(a.shear is None for a in anchors)  # no dowel unless asked for
+
+
+def test_anchor_shear_gives_the_joint_dowel():
+    """``[anchors.shear]``: ``fc`` gives JointDowel.from_bar of the anchor's bar and steel;
+    ``stiffness``/``strength`` give it directly; mixing them is refused, with the key."""
+    from masonry_fdem.interactions.anchors import JointDowel
+
+    data = example()
+    data["anchors"] = [{"layout": "radial", "angles": [60.0], "diameter": 0.016,
+                        "steel": {"E": 200e9, "yield_stress": 460e6}, "shear": {"fc": 12e6}},
+                       {"layout": "radial", "angles": [120.0], "diameter": 0.016,
+                        "shear": {"stiffness": 2e7, "strength": 1e4}}]
+    a0, a1 = load_case(data).anchors()
+    assert a0.shear == JointDowel.from_bar(0.016, 200e9, 460e6, 12e6)
+    assert a1.shear == JointDowel(2e7, 1e4)
+    data["anchors"] = [{"layout": "radial", "angles": [60.0], "diameter": 0.016,
+                        "shear": {"fc": 12e6, "strength": 1e4}},
+                       {"layout": "radial", "angles": [90.0], "diameter": 0.016,
+                        "shear": {"c1": 0.6}},
+                       {"layout": "radial", "angles": [120.0], "diameter": 0.016,
+                        "shear": {"stiffness": 2e7, "c0": 1.0}}]
+    msg = problems_of(data)
+    assert "anchors[0].shear.strength: computed from the bar with fc" in msg
+    assert "anchors[1].shear: give fc" in msg
+    assert "anchors[2].shear.c0: used only with fc" in msg
 
 
 def test_bad_anchors():

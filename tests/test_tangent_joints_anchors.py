@@ -13,7 +13,8 @@ entry, in states chosen away from state transitions (kinks of the laws):
   sliding under compression on the residual friction, with dilatancy;
 * an anchor across a joint: elastic bar and bond; the bar yielding (hardening steel, end
   plates bearing); the bond slipping on the plateau and on the softening branch of its
-  envelope (with a dowel at its strength).
+  envelope (with a dowel at its strength); the joint dowel of the bar (B sliding along
+  the joint), elastic and at its strength.
 
 Each case also checks that the state is the one it claims (plastic loading where it
 should be), so that a drifting set-up cannot pass on an elastic tangent. The elastic
@@ -33,7 +34,8 @@ from test_anchors import grid_blocks
 from masonry_fdem import Material, Model
 from masonry_fdem.geometry import build_stack
 from masonry_fdem.interactions import JointMaterial, Joints
-from masonry_fdem.interactions.anchors import Anchor, Anchors, BondLaw, DowelLaw, SteelLaw
+from masonry_fdem.interactions.anchors import (Anchor, Anchors, BondLaw, DowelLaw, JointDowel,
+                                               SteelLaw)
 from masonry_fdem.interactions.anchors import _kernels as AK
 from masonry_fdem.interactions.joints import _kernels as JK
 from masonry_fdem.interactions.protocol import BLOCKS, State, Tangent
@@ -87,19 +89,22 @@ def anchor_model(comm=MPI.COMM_SELF, **kw):
 
 
 def anchor_field(blocks, anchors, open_, slip, transverse=0.0, end_slip=0.0, noise=1e-8,
-                 seed=1):
+                 seed=1, lift=0.0):
     """Displacements [m] of the block nodes (n_input_nodes, 2) and of the bar nodes
-    (flat): block B moved by ``open_`` along x, A held; each bar node moves with the
-    block around it, plus ``slip`` along the bar and ``transverse`` across it; the first
-    and last node by ±``end_slip`` more (into their plates); plus random ``noise``."""
+    (flat): block B moved by ``open_`` along x and ``lift`` along y (sliding along the
+    joint), A held; each bar node moves with the block around it, plus ``slip`` along
+    the bar and ``transverse`` across it; the first and last node by ±``end_slip`` more
+    (into their plates); plus random ``noise``."""
     rng = np.random.default_rng(seed)
     ub = noise * rng.uniform(-1.0, 1.0, blocks.x.shape)
     ub[blocks.node_block == 1, 0] += open_  # block B
+    ub[blocks.node_block == 1, 1] += lift
     t = (A_END - A_START) / np.linalg.norm(A_END - A_START)
     n = np.array([-t[1], t[0]])
     xa = anchors.x
     ua = noise * rng.uniform(-1.0, 1.0, xa.shape)
     ua[xa[:, 0] > 0.3, 0] += open_
+    ua[xa[:, 0] > 0.3, 1] += lift
     ua += slip * t + transverse * n
     ua[0] += end_slip * t
     ua[-1] -= end_slip * t
@@ -294,6 +299,8 @@ def _anchor_case(case: str):
         kw = {"dowel": DowelLaw(stiffness=5e9, strength=2e4)}
     if case == "bar-yielding":
         kw = {"plates": "both"}
+    if case.startswith("joint-dowel"):
+        kw = {"shear": JointDowel(stiffness=2e8, strength=1e3)}
     model, anchors = anchor_model(**kw)
     pr = Probe(model, anchors, anchors.u.size)
     bx = model.blocks
@@ -305,6 +312,17 @@ def _anchor_case(case: str):
             assert np.all(a.et[:, AK.ES_ALPHA] == 0.0)
             assert np.all(a.nt[:, AK.NS_KAPPA] < 1e-15)  # (round-off of the bond return)
             assert np.abs(a.axial).max() > 0.0
+    elif case.startswith("joint-dowel"):
+        plastic = case == "joint-dowel-plastic"
+        if plastic:  # slid past the dowel's strength (Q_y / K = 5 um), still sliding
+            pr.commit(pr.dofs(*anchor_field(bx, anchors, 1e-6, 0.0, lift=8e-6)))
+        x = pr.dofs(*anchor_field(bx, anchors, 2e-6, 1e-7, lift=9e-6 if plastic else 3e-6))
+
+        def check(a):
+            assert a.n_cross == 1
+            assert bool(a.cout[0, AK.CO_PLASTIC]) == plastic
+            q = abs(a.cout[0, AK.CO_Q])
+            assert (q == pytest.approx(1e3, rel=1e-12)) if plastic else (200.0 < q < 1e3)
     elif case == "bar-yielding":
         pr.commit(pr.dofs(*anchor_field(bx, anchors, 1e-4, 0.0, end_slip=1e-5)))
         assert anchors.es[crossing, AK.ES_ALPHA] > 0.0
@@ -332,7 +350,8 @@ def _anchor_case(case: str):
     return pr, x, check
 
 
-ANCHOR_CASES = ["elastic", "bar-yielding", "bond-plateau", "bond-softening"]
+ANCHOR_CASES = ["elastic", "bar-yielding", "bond-plateau", "bond-softening", "joint-dowel",
+                "joint-dowel-plastic"]
 
 
 @pytest.mark.parametrize("case", ANCHOR_CASES)
@@ -423,13 +442,14 @@ def test_tangent_over_ranks_equals_the_serial_one():
         bx = model.blocks
         Kj = _by_input_id(model, joints, joint_field(bx, 3.3e-5, 2.2e-5, rot=1e-5), None,
                           joint_field(bx, 3e-5, 2e-5), None)
-        model, anchors = anchor_model(comm=comm, plates="both")
+        model, anchors = anchor_model(comm=comm, plates="both",
+                                      shear=JointDowel(stiffness=2e8, strength=1e3))
         if comm.size > 1:  # bond points in both blocks, so on two ranks
             n_local = comm.allgather(int(anchors.local.sum()))
             assert sum(n_local) == anchors.n_bond and max(n_local) < anchors.n_bond
         bx = model.blocks
         ubc, uac = anchor_field(bx, anchors, 1e-4, 0.0, end_slip=1e-5)
-        ub, ua = anchor_field(bx, anchors, 1.2e-4, 1e-6, end_slip=1e-5)
+        ub, ua = anchor_field(bx, anchors, 1.2e-4, 1e-6, end_slip=1e-5, lift=3e-6)
         Ka = _by_input_id(model, anchors, ub, ua, ubc, uac)
         out.append((Kj, Ka))
     for (ser, par), name in zip(zip(out[0], out[1], strict=True), ("joints", "anchors"),

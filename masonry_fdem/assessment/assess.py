@@ -524,7 +524,8 @@ def assess(
         write: write the run folder (False: compute only).
         callback: called on every rank after each converged step with
             ``{"load": N, "displacement": m, "iterations": int, "model": the Model,
-            "interactions": [BlockContact, Joints]}`` (the model at that equilibrium: read
+            "interactions": [BlockContact, Joints], "anchors": Anchors or None}`` (the
+            model at that equilibrium: read
             it, e.g. ``Joints.forces_on``; collective calls on every rank).
         resume: go on from the checkpoint in the run folder (same case, same number of
             ranks) instead of starting afresh; the result is the one the run would have
@@ -762,6 +763,9 @@ def assess(
                 if a["force_max"] > pk["force_max"]:
                     pk.update(force_max=a["force_max"], displacement=float(disp),
                               load=float(load))
+                if "dowel_max" in a and a["dowel_max"] >= pk.get("dowel_max", -1.0):
+                    pk.update(dowel_max=a["dowel_max"], dowel_strength=a["dowel_strength"],
+                              dowel_load=float(load))
         for k, kind, side in opened:
             if (k, kind) not in seen:
                 seen.add((k, kind))
@@ -791,7 +795,7 @@ def assess(
             frame()
         if callback is not None:
             callback({"load": load, "displacement": disp, "iterations": iterations,
-                      "model": model, "interactions": inter})
+                      "model": model, "interactions": inter, "anchors": anchors})
         if ck is None and comm.allreduce(stop_requested(), op=MPI.LOR):
             raise Interrupted(folder, len(loads) - 1, (
                 f"interrupted: {case.name} stopped at step {len(loads) - 1}; dynamic "
@@ -988,9 +992,12 @@ def anchor_state(anchors) -> list[dict]:
     """The state of each anchor (collective): ``name``, ``length`` [m], ``count``,
     ``distance`` [m] of the bar nodes from the anchor's start, ``force`` [N per bar] of
     each bar element (tension positive), ``slip`` [m] at each node, ``force_max`` [N],
-    ``slip_max`` [m], ``yield_force`` [N], ``yielded`` and ``ruptured`` element counts."""
+    ``slip_max`` [m], ``yield_force`` [N], ``yielded`` and ``ruptured`` element counts;
+    with a joint dowel (``Anchor.shear``), ``dowel_max`` [N per bar], the largest |force|
+    of its dowels across the joints, and ``dowel_strength`` [N per bar]."""
     nodes = anchors.node_results()
     force = anchors.axial_force()
+    dowels = anchors.dowel_results()
     out = []
     for k, a in enumerate(anchors.anchors):
         nn, ee = anchors.anchor_nodes[k], anchors.anchor_elements[k]
@@ -1005,6 +1012,10 @@ def anchor_state(anchors) -> list[dict]:
             "yielded": int(np.count_nonzero(anchors.yielded()[ee])),
             "ruptured": int(np.count_nonzero(anchors.ruptured()[ee])),
         })
+        if a.shear is not None:
+            mine = dowels["anchor"] == k
+            out[-1]["dowel_max"] = float(np.abs(dowels["force"][mine]).max(initial=0.0))
+            out[-1]["dowel_strength"] = float(a.shear.strength)
     return out
 
 

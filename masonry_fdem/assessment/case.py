@@ -120,7 +120,13 @@ Schema (``*``: required):
     ``bond_diameter`` [m], ``segment`` [m], ``name``; ``[anchors.steel]`` ``E``,
     ``yield_stress`` [Pa], ``hardening`` [Pa], ``rupture_strain``, ``density``
     (:class:`~masonry_fdem.interactions.anchors.SteelLaw`); ``[anchors.bond]`` ``slip`` [m] and
-    ``stress`` [Pa] lists (:class:`~masonry_fdem.interactions.anchors.BondLaw`). Circular arches only.
+    ``stress`` [Pa] lists (:class:`~masonry_fdem.interactions.anchors.BondLaw`);
+    ``[anchors.shear]`` the bar's dowel action across the joints and ring interfaces it
+    crosses (:class:`~masonry_fdem.interactions.anchors.JointDowel`; none without it):
+    ``fc`` [Pa], the compressive strength of the bedding (``JointDowel.from_bar``:
+    Hetényi's beam on an elastic foundation with Soroushian's subgrade modulus, ``c1``
+    0.8; strength ``c0`` d² √(f_c f_y), ``c0`` 1.3), or ``stiffness`` [N/m] and
+    ``strength`` [N] per bar. Circular arches only.
     ``layout = "inclined"``: straight anchors drilled from the intrados (``positions``\\*:
     s of the entry points; ``inclination`` [deg] to the intrados tangent, 90 = radial,
     below 90 leaning towards the right springing; ``length`` [m], default through to

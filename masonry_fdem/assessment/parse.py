@@ -47,7 +47,7 @@ from masonry_fdem.assessment.specs import (
 )
 from masonry_fdem.constants import G
 from masonry_fdem.geometry.arches import ArchKind, arch_layout
-from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
+from masonry_fdem.interactions.anchors import Anchor, BondLaw, JointDowel, SteelLaw
 from masonry_fdem.interactions.joints import JointMaterial
 from masonry_fdem.materials.elastic import Material
 from masonry_fdem.materials.plasticity import MohrCoulomb
@@ -410,11 +410,29 @@ def _parse_anchor(i: int, data: Any, arch: ArchSpec | None, ctx: _Ctx):
         if getattr(m, key) is None:
             ctx.problems.append(f"{path}.{key}: missing (required by layout = {m.layout!r})")
     steel, bond = _steel_bond(m, path, ctx)
+    shear = None
+    if m.shear is not None and steel is not None:
+        sm, sgiven = m.shear, m.shear.given()
+        if (sm.fc is None) == (sm.stiffness is None):
+            ctx.problems.append(f"{path}.shear: give fc (the bedding's compressive strength: "
+                                "the dowel from the bar) or stiffness and strength, not both")
+        elif sm.fc is not None:
+            if "strength" in sgiven:
+                ctx.problems.append(f"{path}.shear.strength: computed from the bar with fc; "
+                                    "give stiffness and strength without fc instead")
+            else:
+                shear = JointDowel.from_bar(m.diameter, steel.E, steel.yield_stress, sm.fc,
+                                            c1=sm.c1, c0=sm.c0)
+        else:
+            for key in ("c1", "c0"):
+                if key in sgiven:
+                    ctx.problems.append(f"{path}.shear.{key}: used only with fc")
+            shear = JointDowel(sm.stiffness, math.inf if sm.strength is None else sm.strength)
     if len(ctx.problems) > n0:
         return None
     kw: dict[str, Any] = dict(diameter=m.diameter, count=m.count, prestress=m.prestress,
                               plates=m.plates, bond_diameter=m.bond_diameter,
-                              segment=m.segment, name=m.name or f"anchor{i}")
+                              segment=m.segment, name=m.name or f"anchor{i}", shear=shear)
     if m.layout == "radial":
         kw.update(angles=tuple(m.angles), cover=m.cover)
     elif m.layout == "stitch":

@@ -431,6 +431,16 @@ def anchor_peaks_table(peaks: list[dict]) -> list[str]:
         lines.append(f"| {pk['name']} | {pk['force_max'] / 1e3:.2f} | "
                      f"{100 * pk['force_max'] / pk['yield_force']:.0f} % | "
                      f"{pk['displacement'] * 1e3:.3f} | {pk['load'] / 1e3:.2f} |")
+    dow = [pk for pk in peaks if "dowel_max" in pk]
+    if dow:
+        lines += ["", "The largest shear force of each anchor's dowels across the joints it "
+                  "crosses (per bar), against the dowel's strength:", "",
+                  "| anchor | largest dowel force [kN] | of strength | at load [kN] |",
+                  "|---|---|---|---|"]
+        for pk in dow:
+            lines.append(f"| {pk['name']} | {pk['dowel_max'] / 1e3:.2f} | "
+                         f"{100 * pk['dowel_max'] / pk['dowel_strength']:.0f} % | "
+                         f"{pk['dowel_load'] / 1e3:.2f} |")
     return lines
 
 

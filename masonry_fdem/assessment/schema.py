@@ -285,6 +285,19 @@ class BondModel(_Table):
     stress: numbers("Pa")
 
 
+class ShearModel(_Table):
+    """``[anchors.shear]``: the bar's dowel action across the joints it crosses
+    (:class:`~masonry_fdem.interactions.anchors.JointDowel`): ``fc`` (the bedding's
+    compressive strength; stiffness and strength from the bar by ``JointDowel.from_bar``,
+    with ``c1``, ``c0``), or ``stiffness`` [N/m] and ``strength`` [N] per bar."""
+
+    fc: num("Pa", "fc", optional=True, gt=0.0) = None
+    c1: num("", gt=0.0) = 0.8
+    c0: num("", gt=0.0) = 1.3
+    stiffness: num("N/m", optional=True, gt=0.0) = None
+    strength: num("N", "force", optional=True, gt=0.0) = None
+
+
 class AnchorModel(_Table):
     """``[[anchors]]``; which keys a ``layout`` uses is checked in :mod:`.parse`."""
 
@@ -307,6 +320,7 @@ class AnchorModel(_Table):
     name: str | None = None
     steel: SteelModel = SteelModel()
     bond: BondModel | None = None
+    shear: ShearModel | None = None
 
 
 class LayoutModel(_Table):

@@ -18,7 +18,7 @@ from masonry_fdem.constants import G
 from masonry_fdem.geometry.arches import ArchKind, arch_layout, arch_parameter, ring_pieces
 from masonry_fdem.geometry.layout import BlockLayout
 from masonry_fdem.geometry.planar import inside_any, on_segments, polyline_distance
-from masonry_fdem.interactions.anchors import Anchor, BondLaw, SteelLaw
+from masonry_fdem.interactions.anchors import Anchor, BondLaw, JointDowel, SteelLaw
 from masonry_fdem.interactions.joints import JointMaterial
 from masonry_fdem.materials.elastic import Material
 
@@ -220,6 +220,7 @@ class AnchorSpec:
     bond_diameter: float | None = None
     segment: float | None = None
     name: str = "anchor"
+    shear: JointDowel | None = None
 
     def build(self, arch: ArchSpec) -> list[Anchor]:
         """The anchors in ``arch``.
@@ -229,7 +230,8 @@ class AnchorSpec:
         """
         kw = dict(diameter=self.diameter, steel=self.steel, bond=self.bond, count=self.count,
                   prestress=self.prestress, plates=self.plates,
-                  bond_diameter=self.bond_diameter, segment=self.segment, name=self.name)
+                  bond_diameter=self.bond_diameter, segment=self.segment, name=self.name,
+                  shear=self.shear)
         geo = dict(span=arch.span, kind=arch.kind.value, rise=arch.rise)
         if self.layout == "radial":
             return radial_anchors(self.angles, ring_thickness=arch.ring_thickness,

@@ -1,10 +1,11 @@
 """Repairs: grouted steel anchors embedded in the masonry, with bond–slip and prestress."""
 
 from masonry_fdem.interactions.anchors.anchors import Anchors, straight_anchor, wall_ties
-from masonry_fdem.interactions.anchors.laws import Anchor, BondLaw, DowelLaw, SteelLaw
+from masonry_fdem.interactions.anchors.laws import (Anchor, BondLaw, DowelLaw, JointDowel,
+                                                     SteelLaw)
 
-__all__ = ["Anchor", "Anchors", "BondLaw", "DowelLaw", "SteelLaw", "straight_anchor",
-           "wall_ties"]
+__all__ = ["Anchor", "Anchors", "BondLaw", "DowelLaw", "JointDowel", "SteelLaw",
+           "straight_anchor", "wall_ties"]
 
 
 def precompile() -> None:

@@ -15,7 +15,11 @@ with the masonry, and the two are tied by
 * a **transverse tie** across the bar: stiff and elastic by default (stiffness per metre of
   bar equal to the host block's Young's modulus, the modulus of a Winkler foundation of a
   bar in an elastic continuum), or a :class:`DowelLaw` (elastic–perfectly plastic);
-* optional **end plates**, bearing (compression only) between a bar end and its block.
+* optional **end plates**, bearing (compression only) between a bar end and its block;
+* optional **dowel action across joints** (``Anchor.shear``, a :class:`JointDowel`): where
+  a bar element bridges two blocks, a shear spring between the two blocks' material points
+  at the crossing, across the bar (Lorig 1985): the bars are trusses, so without it a bar
+  resists a joint's opening but not its sliding.
 
 The bar is elasto-plastic steel with linear hardening and rupture (:class:`SteelLaw`).
 Anchors cross joints, cracks and ring interfaces: a bar element whose two nodes are hosted
@@ -56,13 +60,15 @@ import numpy as np
 
 from masonry_fdem.geometry.locate import locate_in_block, locate_points
 from masonry_fdem.interactions.anchors import _kernels as AK
-from masonry_fdem.interactions.anchors.laws import Anchor, BondLaw, DowelLaw, SteelLaw
+from masonry_fdem.interactions.anchors.laws import (Anchor, BondLaw, DowelLaw, JointDowel,
+                                                     SteelLaw)
 from masonry_fdem.interactions.protocol import BLOCKS, DofSet, Interaction, State, Tangent
 
 __all__ = [
     "SteelLaw",
     "BondLaw",
     "DowelLaw",
+    "JointDowel",
     "Anchor",
     "Anchors",
     "straight_anchor",
@@ -136,7 +142,7 @@ class Anchors(Interaction):
 
     name = "anchors"
     state_attributes = ("u", "v", "es", "et", "ns", "nt", "dref", "axial", "strain",
-                        "bond_out", "jacking", "npr", "ep", "reaction")
+                        "bond_out", "jacking", "npr", "ep", "reaction", "cw", "cwt", "cout")
 
     def __init__(self, model, anchors: Sequence[Anchor]):
         anchors = list(anchors) if not isinstance(anchors, Anchor) else [anchors]
@@ -270,6 +276,36 @@ class Anchors(Interaction):
                 if flag and half_block[e, side] < 0:
                     raise ValueError(f"{a.name or f'anchor {k}'}: its {where} plate is "
                                      "outside the blocks")
+        # ---- joint dowels: the bar elements bridging two blocks, of anchors with a shear
+        # law; the crossing (the element's midpoint: it is centred on the joint) located in
+        # each of the two blocks
+        cross = np.flatnonzero((half_block[:, 0] >= 0) & (half_block[:, 1] >= 0)
+                               & (half_block[:, 0] != half_block[:, 1])
+                               & np.array([anchors[k].shear is not None
+                                           for k in self.elem_anchor], dtype=bool))
+        nc = self.n_cross = int(cross.size)
+        self.celem = cross.astype(np.int64)
+        self.cblock = half_block[cross].astype(np.int64).reshape(nc, 2)
+        self.cpoint = 0.5 * (xa[cross] + xb[cross]).reshape(nc, 2)
+        self.cinput = np.zeros((nc, 2, 3), dtype=np.int64)
+        self.chost = np.full((nc, 2, 3), -1, dtype=np.int64)
+        self.chw = np.zeros((nc, 2, 3))
+        self.cprop = np.zeros((nc, 2))
+        for c in range(nc):
+            a = anchors[self.elem_anchor[cross[c]]]
+            self.cprop[c] = (a.count * a.shear.stiffness, a.count * a.shear.strength)
+            for side in range(2):
+                cell, w = locate_in_block(blocks, int(self.cblock[c, side]), self.cpoint[c])
+                self.cinput[c, side] = blocks.cells[cell]
+                self.chw[c, side] = w
+                if block_rank[self.cblock[c, side]] == rank:
+                    self.chost[c, side] = inv[self.cinput[c, side]]
+        if np.any(self.chost[block_rank[self.cblock] == rank] < 0):
+            raise RuntimeError("a joint dowel's host node is missing on its owner rank")
+        self.cw = np.zeros(nc)
+        self.cwt = np.zeros(nc)
+        self.cout = np.zeros((nc, AK.N_CO))
+        self._uc = np.zeros((nc, 4))
         kmax = max(len(b.slip) for b in laws)
         self.laws_s = np.zeros((len(laws), kmax))
         self.laws_t = np.zeros((len(laws), kmax))
@@ -311,6 +347,11 @@ class Anchors(Interaction):
         for h in np.flatnonzero(local):
             for j, w in zip(self.hosts[h], self.hw[h], strict=True):
                 self.host_rowsum[2 * j:2 * j + 2] += 2.0 * _DIR * k_h[h] * w
+        for c in range(nc):  # a dowel's row: K w_m (Σ w of both sides) = 2 K w_m
+            for side in range(2):
+                for j, w in zip(self.chost[c, side], self.chw[c, side], strict=True):
+                    if j >= 0:
+                        self.host_rowsum[2 * j:2 * j + 2] += 2.0 * _DIR * self.cprop[c, 0] * w
 
     # ------------------------------------------------------------------ set-up
     def prescribe(self, name: str, anchor: int = 0, node: str | int = "end",
@@ -372,8 +413,9 @@ class Anchors(Interaction):
         rows["anchors"] += self.rowsum
 
     def add_forces(self, state: State) -> None:
-        """Bond, dowel and plate forces on the local host nodes, and the total force on
-        every bar node (bond summed over ranks, then the bars'; collective)."""
+        """Bond, dowel and plate forces on the local host nodes, the joint dowels' forces on
+        the local nodes of their two blocks, and the total force on every bar node (bond
+        summed over ranks, then the bars'; collective)."""
         self._fbond.fill(0.0)
         ua, fa = state.u["anchors"], state.f["anchors"]
         AK.bond_forces(self.x, ua, state.u[BLOCKS], self.conn, self.hnode,
@@ -383,6 +425,12 @@ class Anchors(Interaction):
         if self.comm.size > 1:
             self.comm.Allreduce(MPI.IN_PLACE, self._fbond, op=MPI.SUM)
         fa += self._fbond
+        if self.n_cross:
+            AK.crossing_displacements(state.u[BLOCKS], self.chost, self.chw, self._uc)
+            if self.comm.size > 1:
+                self.comm.Allreduce(MPI.IN_PLACE, self._uc, op=MPI.SUM)
+            AK.dowel_forces(self.x, ua, self.conn, self.celem, self._uc, self.cprop, self.cw,
+                            self.cwt, self.cout, self.chost, self.chw, state.f[BLOCKS])
         AK.bar_forces(self.x, ua, self.conn, self.L0, self.ep, self.jacking, self.es,
                       self.et, self.axial, self.strain, fa)
 
@@ -405,6 +453,19 @@ class Anchors(Interaction):
         if nent:
             glob = np.r_[K.index["anchors"], K.index[BLOCKS][:ub.size]]
             K.add(glob[rows[:nent]], glob[cols[:nent]], vals[:nent])
+        if self.n_cross:
+            nc = self.n_cross
+            glob = K.node_dofs(self.cinput.reshape(-1)).reshape(nc, 2, 3, 2)[..., 0]
+            gbar = 2 * self.conn[self.celem]  # local x dofs of the bar nodes ...
+            gbar = np.asarray(K.index["anchors"])[gbar]  # ... numbered globally
+            rows = np.empty(192 * nc, dtype=np.int64)
+            cols = np.empty(192 * nc, dtype=np.int64)
+            vals = np.empty(192 * nc)
+            nent = AK.dowel_tangent(self.cout, self.cprop, self.chost, self.chw,
+                                    np.ascontiguousarray(glob), np.ascontiguousarray(gbar),
+                                    rows, cols, vals)
+            if nent:
+                K.add(rows[:nent], cols[:nent], vals[:nent])
         if K.rank == 0:
             ne = self.n_elements
             rows = np.empty(16 * ne, dtype=np.int64)
@@ -419,14 +480,18 @@ class Anchors(Interaction):
         """Accept the trial bond and steel state."""
         self.es[:] = self.et
         self.ns[:] = self.nt
+        self.cw[:] = self.cwt
 
     def energies(self) -> dict[str, float]:
-        """Elastic energy of the bars, ½ Σ N² L0/(E A) [J], the part of the anchors'
-        energy held now; bond and dissipated energies are not tracked (the work the
+        """Elastic energy of the bars, ½ Σ N² L0/(E A), and of the joint dowels, ½ Σ q²/K
+        [J], the part of the anchors' energy held now; bond and dissipated energies are not tracked (the work the
         anchors' forces do is in the solver's energy account)."""
         area = self.ep[:, AK.EP_AREA]
         bar = 0.5 * float(np.sum(self.axial**2 * self.L0 / (self.ep[:, AK.EP_E] * area)))
-        return {"stored": bar, "dissipated": 0.0, "bar_elastic": bar}
+        dow = 0.5 * float(np.sum(self.cout[:, AK.CO_Q] ** 2 / np.maximum(self.cprop[:, 0],
+                                                                          1e-300)))
+        return {"stored": bar + dow, "dissipated": 0.0, "bar_elastic": bar,
+                "dowel_elastic": dow}
 
     def lock_off(self) -> None:
         """Lock the jacked anchors off at their prestress and grout them (collective).
@@ -459,7 +524,8 @@ class Anchors(Interaction):
     def reset(self) -> None:
         """Back to the unloaded, unjacked state."""
         for arr in (self.u, self.v, self.f, self.es, self.et, self.ns, self.nt, self.dref,
-                    self.axial, self.strain, self.bond_out, self.reaction):
+                    self.axial, self.strain, self.bond_out, self.reaction, self.cw, self.cwt,
+                    self.cout):
             arr[...] = 0.0
         self.jacking[:] = [self.anchors[k].prestress > 0 for k in self.elem_anchor]
         self.npr[:, AK.NP_BONDED] = 1.0 - self.jacking[self.helem]
@@ -509,6 +575,21 @@ class Anchors(Interaction):
             "transverse": out[:, AK.NO_W],
             "transverse_force": out[:, AK.NO_Q] / count,
             "plate_force": out[:, AK.NO_PLATE] / count,
+        }
+
+    def dowel_results(self) -> dict[str, np.ndarray]:
+        """Per joint dowel (a bar element bridging two blocks, of an anchor with a
+        ``shear`` law; every rank): "element", "anchor", "position" [m] (reference),
+        "slip" [m] across the bar, "force" [N per bar], "strength" [N per bar], "plastic"
+        (on the plateau), at the last force evaluation."""
+        count = self.count_e[self.celem]
+        return {
+            "element": self.celem, "anchor": self.elem_anchor[self.celem],
+            "position": self.cpoint,
+            "slip": self.cout[:, AK.CO_W].copy(),
+            "force": self.cout[:, AK.CO_Q] / count,
+            "strength": self.cprop[:, 1] / count,
+            "plastic": self.cout[:, AK.CO_PLASTIC] > 0.5,
         }
 
     def node_results(self) -> dict[str, np.ndarray]:
