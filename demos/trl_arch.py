@@ -152,9 +152,9 @@ if comm.rank == 0:
               f"{top['force_max'] / 1e3:.2f} kN, "
               f"{100 * top['force_max'] / top['yield_force']:.0f} %"
               f" of yield")
-        dow = [x for x in a.anchor_peaks if "dowel_max" in x]
+        dow = [x for x in a.anchor_peaks if x.get("dowel_strength")]
         if dow:
-            top = max(dow, key=lambda x: x["dowel_max"])
+            top = max(dow, key=lambda x: x["dowel_max"] / x["dowel_strength"])
             print(f"  largest dowel force across the sand layers: {top['name']} "
                   f"{top['dowel_max'] / 1e3:.2f} kN per bar, "
                   f"{100 * top['dowel_max'] / top['dowel_strength']:.0f} % of its strength")

@@ -222,7 +222,8 @@ def test_sliding_joint_is_held_by_the_dowel_of_the_bar_across_it(comm):
     """B slides along the dry joint (no normal force, so no friction) across a bar with a
     joint dowel K = 1e8 N/m, Q_y = 500 N: the force holding B is K δ, then Q_y on the
     plateau, and on unloading Q_y − K (δ_max − δ) (elastic-perfectly plastic, plastic slip
-    kept); the dowel's own output agrees. Without the dowel the bar (a truss) holds B
+    kept); the dowel's own output agrees, and its slip is measured across the bar as laid
+    (B translates) however far the bridging element's chord has turned. Without the dowel the bar (a truss) holds B
     by nothing but the kink of its crossing element: under 1 % of those forces. On one
     rank and on all (A and B on different ranks under mpirun)."""
     k, qy = 1e8, 500.0
@@ -245,6 +246,13 @@ def test_sliding_joint_is_held_by_the_dowel_of_the_bar_across_it(comm):
             assert bool(res["plastic"][0])
         assert dr0.solve(0.0, displacement={"B": (0.0, delta)}).converged
         assert abs(dr0.reactions()["B"][1]) < 0.01 * qy
+    # slid 0.1 mm, five times the bridging element's length / 200: the dowel acts across
+    # the bar as laid (B only translates), not across the element's turned chord
+    assert dr.solve(0.0, displacement={"B": (0.0, 1e-4)}).converged
+    from masonry_fdem.interactions.anchors import _kernels as AK
+
+    np.testing.assert_allclose(anchors.cout[0, [AK.CO_NX, AK.CO_NY]], [0.0, 1.0], atol=1e-12)
+    assert anchors.dowel_results()["slip"][0] == pytest.approx(1e-4, rel=1e-9)
 
 
 def test_joint_dowel_from_the_bar_and_its_bedding():

@@ -763,7 +763,7 @@ def assess(
                 if a["force_max"] > pk["force_max"]:
                     pk.update(force_max=a["force_max"], displacement=float(disp),
                               load=float(load))
-                if "dowel_max" in a and a["dowel_max"] >= pk.get("dowel_max", -1.0):
+                if "dowel_max" in a and a["dowel_max"] > pk.get("dowel_max", -1.0):
                     pk.update(dowel_max=a["dowel_max"], dowel_strength=a["dowel_strength"],
                               dowel_load=float(load))
         for k, kind, side in opened:
@@ -994,7 +994,7 @@ def anchor_state(anchors) -> list[dict]:
     each bar element (tension positive), ``slip`` [m] at each node, ``force_max`` [N],
     ``slip_max`` [m], ``yield_force`` [N], ``yielded`` and ``ruptured`` element counts;
     with a joint dowel (``Anchor.shear``), ``dowel_max`` [N per bar], the largest |force|
-    of its dowels across the joints, and ``dowel_strength`` [N per bar]."""
+    of its dowels across the joints, and ``dowel_strength`` [N per bar] (None: elastic)."""
     nodes = anchors.node_results()
     force = anchors.axial_force()
     dowels = anchors.dowel_results()
@@ -1015,7 +1015,8 @@ def anchor_state(anchors) -> list[dict]:
         if a.shear is not None:
             mine = dowels["anchor"] == k
             out[-1]["dowel_max"] = float(np.abs(dowels["force"][mine]).max(initial=0.0))
-            out[-1]["dowel_strength"] = float(a.shear.strength)
+            st = float(a.shear.strength)  # None: an elastic dowel
+            out[-1]["dowel_strength"] = st if math.isfinite(st) else None
     return out
 
 

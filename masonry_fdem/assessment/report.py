@@ -438,8 +438,9 @@ def anchor_peaks_table(peaks: list[dict]) -> list[str]:
                   "| anchor | largest dowel force [kN] | of strength | at load [kN] |",
                   "|---|---|---|---|"]
         for pk in dow:
-            lines.append(f"| {pk['name']} | {pk['dowel_max'] / 1e3:.2f} | "
-                         f"{100 * pk['dowel_max'] / pk['dowel_strength']:.0f} % | "
+            st = pk["dowel_strength"]
+            of = f"{100 * pk['dowel_max'] / st:.0f} %" if st is not None else "elastic"
+            lines.append(f"| {pk['name']} | {pk['dowel_max'] / 1e3:.2f} | {of} | "
                          f"{pk['dowel_load'] / 1e3:.2f} |")
     return lines
 

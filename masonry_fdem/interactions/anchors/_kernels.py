@@ -30,14 +30,19 @@ force [N].
 Joint dowels (:class:`~masonry_fdem.interactions.anchors.laws.JointDowel`): crossing ``c``
 is bar element ``celem[c]`` bridging a joint, with the material point of the crossing in
 each of the two blocks (side 0 and 1: host nodes ``chost[c, s]``, local numbers, −1 where
-the block is another rank's; weights ``chw[c, s]``). ``uc[c]`` holds the two material
-points' displacements (side 0 x, y, side 1 x, y; summed over ranks). The slip across the
-bar w = (u₁ − u₀)·n, n the bar element's current normal; the force q = K (w − w_p) up to
-±Q_y (``cprop[c]`` = count·K [N/m], count·Q_y [N]), +q n on side 0 and −q n on side 1.
-Committed plastic slip ``cw``, trial ``cwt``; outputs ``cout`` (``CO_W`` slip [m],
-``CO_Q`` force [N], ``CO_PLASTIC`` 1 on the plateau, ``CO_NX``, ``CO_NY`` the normal,
-``CO_DT`` the relative displacement along the bar [m], ``CO_L`` the element's length [m]).
-Its tangent is analytic (:func:`dowel_tangent`), the normal turning with the bar included.
+the block is another rank's; weights ``chw[c, s]``; shape-function gradients
+``cgrad[c, s, m]`` = (∂N/∂x, ∂N/∂y) of the host triangle). ``uc[c]`` holds the two
+material points' displacements and the host triangles' rotations ω = ½(∂u_y/∂x −
+∂u_x/∂y) (side 0 x, y, side 1 x, y, ω0, ω1; summed over ranks). The bar's normal turns
+with the blocks: n = R(θ) n0, θ = (ω0 + ω1)/2, n0 the reference normal ``cn0[c]`` (not
+with the bridging element, whose chord would turn by slip/ℓ, ℓ a mesh length). The slip
+across the bar w = (u₁ − u₀)·n; the force q = K (w − w_p) up to ±Q_y (``cprop[c]`` =
+count·K [N/m], count·Q_y [N]), +q n on side 0 and −q n on side 1. A bar still jacked
+(ungrouted) has no dowel: q = 0, w_p follows w. Committed plastic slip ``cw``, trial
+``cwt``; outputs ``cout`` (``CO_W`` slip [m], ``CO_Q`` force [N], ``CO_PLASTIC`` 1 on
+the plateau or jacked, ``CO_NX``, ``CO_NY`` the normal, ``CO_DT`` the relative
+displacement along the bar [m]). Its tangent is analytic (:func:`dowel_tangent`), the
+turning normal included.
 
 Consistent tangent (static Newton solver): a numerical algorithmic tangent (Miehe 1996,
 "Numerical computation of algorithmic (consistent) tangent moduli in large-strain
@@ -78,8 +83,8 @@ NS_SP, NS_KAPPA, NS_WP = range(3)
 N_NS = 3
 NO_SLIP, NO_TAU, NO_W, NO_Q, NO_PLATE = range(5)
 N_NO = 5
-CO_W, CO_Q, CO_PLASTIC, CO_NX, CO_NY, CO_DT, CO_L = range(7)
-N_CO = 7
+CO_W, CO_Q, CO_PLASTIC, CO_NX, CO_NY, CO_DT = range(6)
+N_CO = 6
 
 #: finite-difference step of the tangents, as a fraction of the bar element's length L0
 #: (see the module doc)
@@ -509,42 +514,49 @@ def relative_displacements(ua, ub, hnode, hosts, hw, d):
 
 
 @njit(cache=True)
-def crossing_displacements(ub, chost, chw, uc):
-    """uc[c] = displacements of the crossing's material points on the local sides (0 on
-    another rank's side)."""
+def crossing_displacements(ub, chost, chw, cgrad, uc):
+    """uc[c] = displacements of the crossing's material points and rotations of their host
+    triangles on the local sides (0 on another rank's side)."""
     for c in range(chost.shape[0]):
         for s in range(2):
             ux = 0.0
             uy = 0.0
+            om = 0.0
             if chost[c, s, 0] >= 0:
                 for k in range(3):
                     j = chost[c, s, k]
                     ux += chw[c, s, k] * ub[2 * j]
                     uy += chw[c, s, k] * ub[2 * j + 1]
+                    om += 0.5 * (cgrad[c, s, k, 0] * ub[2 * j + 1]
+                                 - cgrad[c, s, k, 1] * ub[2 * j])
             uc[c, 2 * s] = ux
             uc[c, 2 * s + 1] = uy
+            uc[c, 4 + s] = om
 
 
 @njit(cache=True)
-def dowel_forces(xa, ua, conn, celem, uc, cprop, cw, cwt, cout, chost, chw, fb):
+def dowel_forces(celem, jacking, cn0, uc, cprop, cw, cwt, cout, chost, chw, fb):
     """Joint dowel forces (see the module doc): trial plastic slips into ``cwt``, outputs
     into ``cout`` (every crossing), forces added to ``fb`` at the local sides' nodes."""
     for c in range(celem.shape[0]):
-        e = celem[c]
-        a = conn[e, 0]
-        b = conn[e, 1]
-        dx = xa[b, 0] + ua[2 * b] - xa[a, 0] - ua[2 * a]
-        dy = xa[b, 1] + ua[2 * b + 1] - xa[a, 1] - ua[2 * a + 1]
-        ell = math.sqrt(dx * dx + dy * dy)
-        nx = -dy / ell
-        ny = dx / ell
-        w = (uc[c, 2] - uc[c, 0]) * nx + (uc[c, 3] - uc[c, 1]) * ny
+        th = 0.5 * (uc[c, 4] + uc[c, 5])
+        cs = math.cos(th)
+        sn = math.sin(th)
+        nx = cs * cn0[c, 0] - sn * cn0[c, 1]
+        ny = sn * cn0[c, 0] + cs * cn0[c, 1]
+        dx = uc[c, 2] - uc[c, 0]
+        dy = uc[c, 3] - uc[c, 1]
+        w = dx * nx + dy * ny
         k = cprop[c, 0]
         qy = cprop[c, 1]
         wp = cw[c]
         q = k * (w - wp)
         plastic = 0.0
-        if abs(q) > qy:
+        if jacking[celem[c]]:  # ungrouted: no dowel, its slip counted from the grouting
+            q = 0.0
+            wp = w
+            plastic = 1.0
+        elif abs(q) > qy:
             q = qy if q > 0.0 else -qy
             wp = w - q / k
             plastic = 1.0
@@ -554,8 +566,7 @@ def dowel_forces(xa, ua, conn, celem, uc, cprop, cw, cwt, cout, chost, chw, fb):
         cout[c, CO_PLASTIC] = plastic
         cout[c, CO_NX] = nx
         cout[c, CO_NY] = ny
-        cout[c, CO_DT] = (uc[c, 2] - uc[c, 0]) * ny - (uc[c, 3] - uc[c, 1]) * nx
-        cout[c, CO_L] = ell
+        cout[c, CO_DT] = dx * ny - dy * nx
         for s in range(2):
             if chost[c, s, 0] < 0:
                 continue
@@ -567,16 +578,16 @@ def dowel_forces(xa, ua, conn, celem, uc, cprop, cw, cwt, cout, chost, chw, fb):
 
 
 @njit(cache=True)
-def dowel_tangent(cout, cprop, chost, chw, glob, gbar, rows, cols, vals):
-    """−∂f/∂u of the joint dowels, rows of the local sides' nodes; columns of both sides'
-    nodes (``glob[c, s, m]``: global x dof of node m of side s) and of the bar element's
-    two nodes (``gbar[c]``), at the last :func:`dowel_forces`. Returns the number of
-    entries written.
+def dowel_tangent(cout, cprop, chost, chw, cgrad, glob, rows, cols, vals):
+    """−∂f/∂u of the joint dowels, rows of the local sides' nodes, columns of both sides'
+    nodes (``glob[c, s, m]``: global x dof of node m of side s), at the last
+    :func:`dowel_forces`. Returns the number of entries written (144 per crossing with
+    a local side).
 
-    With Δ the two material points' relative displacement, t the bar's unit vector, n its
-    normal and ℓ its length, f = ±q n w_m and ∂n/∂(x_b − x_a) = −t nᵀ/ℓ: the block columns
-    take K_el w w' n nᵀ (K_el = K, or 0 on the plateau), the bar's second node
-    M = sg w (K_el (Δ·t)/ℓ n nᵀ + q/ℓ t nᵀ), its first −M.
+    With Δ the two material points' relative displacement, t = (n_y, −n_x) along the bar,
+    f = ±q n w_m, ∂n/∂θ = −t and ∂θ/∂u_p = ¼(−∂N_p/∂y, ∂N_p/∂x) on either side's
+    triangle: −∂f_m/∂u_p = K_el s s' w_m w_p n nᵀ + s w_m (K_el (Δ·t) n + q t) g_pᵀ
+    (K_el = K, or 0 on the plateau; s = ±1 by side).
     """
     nent = 0
     for c in range(cout.shape[0]):
@@ -584,9 +595,8 @@ def dowel_tangent(cout, cprop, chost, chw, glob, gbar, rows, cols, vals):
         nx = cout[c, CO_NX]
         ny = cout[c, CO_NY]
         n = (nx, ny)
-        t = (ny, -nx)
-        a1 = kel * cout[c, CO_DT] / cout[c, CO_L]
-        a2 = cout[c, CO_Q] / cout[c, CO_L]
+        v = (kel * cout[c, CO_DT] * nx + cout[c, CO_Q] * ny,
+             kel * cout[c, CO_DT] * ny - cout[c, CO_Q] * nx)
         for s in range(2):
             if chost[c, s, 0] < 0:
                 continue
@@ -597,20 +607,13 @@ def dowel_tangent(cout, cprop, chost, chw, glob, gbar, rows, cols, vals):
                     sr = 1.0 if r == 0 else -1.0
                     for p in range(3):
                         kk = kel * wm * sr * chw[c, r, p]
+                        g = (-0.25 * cgrad[c, r, p, 1], 0.25 * cgrad[c, r, p, 0])
                         for ia in range(2):
                             for ib in range(2):
                                 rows[nent] = glob[c, s, m] + ia
                                 cols[nent] = glob[c, r, p] + ib
-                                vals[nent] = kk * n[ia] * n[ib]
+                                vals[nent] = kk * n[ia] * n[ib] + wm * v[ia] * g[ib]
                                 nent += 1
-                for ia in range(2):
-                    for ib in range(2):
-                        mab = wm * (a1 * n[ia] + a2 * t[ia]) * n[ib]
-                        for node in range(2):
-                            rows[nent] = glob[c, s, m] + ia
-                            cols[nent] = gbar[c, node] + ib
-                            vals[nent] = mab if node == 1 else -mab
-                            nent += 1
     return nent
 
 
@@ -637,14 +640,14 @@ def precompile() -> None:
     relative_displacements(ua, ub, hn, hosts, hw, np.zeros((2, 2)))
     ch = np.array([[[0, 1, 2], [-1, -1, -1]]], dtype=np.int64)
     cw3 = np.full((1, 2, 3), 1.0 / 3.0)
-    uc = np.zeros((1, 4))
-    crossing_displacements(ub, ch, cw3, uc)
+    cg = np.ones((1, 2, 3, 2))
+    uc = np.zeros((1, 6))
+    crossing_displacements(ub, ch, cw3, cg, uc)
     co = np.zeros((1, N_CO))
-    dowel_forces(xa, ua, conn, np.zeros(1, np.int64), uc, np.ones((1, 2)), np.zeros(1),
-                 np.zeros(1), co, ch, cw3, np.zeros(8))
-    dowel_tangent(co, np.ones((1, 2)), ch, cw3, np.zeros((1, 2, 3), np.int64),
-                  np.zeros((1, 2), np.int64), np.zeros(192, np.int64),
-                  np.zeros(192, np.int64), np.zeros(192))
+    dowel_forces(np.zeros(1, np.int64), np.zeros(1, np.int8), np.ones((1, 2)), uc,
+                 np.ones((1, 2)), np.zeros(1), np.zeros(1), co, ch, cw3, np.zeros(8))
+    dowel_tangent(co, np.ones((1, 2)), ch, cw3, cg, np.zeros((1, 2, 3), np.int64),
+                  np.zeros(144, np.int64), np.zeros(144, np.int64), np.zeros(144))
     bar_tangent(xa, ua, conn, np.full(1, 0.5), ep, np.zeros(1, np.int8), es, FD_STEP,
                 np.zeros(16, np.int64), np.zeros(16, np.int64), np.zeros(16))
     bond_tangent(xa, ua, ub, conn, np.full(1, 0.5), hn, he, hosts, hw, npr, np.ones((1, 1)),

@@ -142,7 +142,8 @@ class Anchors(Interaction):
 
     name = "anchors"
     state_attributes = ("u", "v", "es", "et", "ns", "nt", "dref", "axial", "strain",
-                        "bond_out", "jacking", "npr", "ep", "reaction", "cw", "cwt", "cout")
+                        "bond_out", "jacking", "npr", "ep", "reaction", "cw", "cwt", "cout",
+                        "dowel_work")
 
     def __init__(self, model, anchors: Sequence[Anchor]):
         anchors = list(anchors) if not isinstance(anchors, Anchor) else [anchors]
@@ -291,6 +292,10 @@ class Anchors(Interaction):
         self.chost = np.full((nc, 2, 3), -1, dtype=np.int64)
         self.chw = np.zeros((nc, 2, 3))
         self.cprop = np.zeros((nc, 2))
+        self.cgrad = np.zeros((nc, 2, 3, 2))
+        tb = (xb[cross] - xa[cross]).reshape(nc, 2)
+        tb /= np.linalg.norm(tb, axis=1)[:, None]
+        self.cn0 = np.ascontiguousarray(np.c_[-tb[:, 1], tb[:, 0]])  # reference normal
         for c in range(nc):
             a = anchors[self.elem_anchor[cross[c]]]
             self.cprop[c] = (a.count * a.shear.stiffness, a.count * a.shear.strength)
@@ -298,6 +303,10 @@ class Anchors(Interaction):
                 cell, w = locate_in_block(blocks, int(self.cblock[c, side]), self.cpoint[c])
                 self.cinput[c, side] = blocks.cells[cell]
                 self.chw[c, side] = w
+                p = blocks.x[blocks.cells[cell]]  # ∇N of the linear triangle
+                jac = np.array([p[1] - p[0], p[2] - p[0]]).T
+                inv_t = np.linalg.inv(jac).T
+                self.cgrad[c, side] = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]) @ inv_t.T
                 if block_rank[self.cblock[c, side]] == rank:
                     self.chost[c, side] = inv[self.cinput[c, side]]
         if np.any(self.chost[block_rank[self.cblock] == rank] < 0):
@@ -305,7 +314,8 @@ class Anchors(Interaction):
         self.cw = np.zeros(nc)
         self.cwt = np.zeros(nc)
         self.cout = np.zeros((nc, AK.N_CO))
-        self._uc = np.zeros((nc, 4))
+        self.dowel_work = np.zeros(1)  # plastic work of the joint dowels [J]
+        self._uc = np.zeros((nc, 6))
         kmax = max(len(b.slip) for b in laws)
         self.laws_s = np.zeros((len(laws), kmax))
         self.laws_t = np.zeros((len(laws), kmax))
@@ -426,10 +436,11 @@ class Anchors(Interaction):
             self.comm.Allreduce(MPI.IN_PLACE, self._fbond, op=MPI.SUM)
         fa += self._fbond
         if self.n_cross:
-            AK.crossing_displacements(state.u[BLOCKS], self.chost, self.chw, self._uc)
+            AK.crossing_displacements(state.u[BLOCKS], self.chost, self.chw, self.cgrad,
+                                      self._uc)
             if self.comm.size > 1:
                 self.comm.Allreduce(MPI.IN_PLACE, self._uc, op=MPI.SUM)
-            AK.dowel_forces(self.x, ua, self.conn, self.celem, self._uc, self.cprop, self.cw,
+            AK.dowel_forces(self.celem, self.jacking, self.cn0, self._uc, self.cprop, self.cw,
                             self.cwt, self.cout, self.chost, self.chw, state.f[BLOCKS])
         AK.bar_forces(self.x, ua, self.conn, self.L0, self.ep, self.jacking, self.es,
                       self.et, self.axial, self.strain, fa)
@@ -456,14 +467,11 @@ class Anchors(Interaction):
         if self.n_cross:
             nc = self.n_cross
             glob = K.node_dofs(self.cinput.reshape(-1)).reshape(nc, 2, 3, 2)[..., 0]
-            gbar = 2 * self.conn[self.celem]  # local x dofs of the bar nodes ...
-            gbar = np.asarray(K.index["anchors"])[gbar]  # ... numbered globally
-            rows = np.empty(192 * nc, dtype=np.int64)
-            cols = np.empty(192 * nc, dtype=np.int64)
-            vals = np.empty(192 * nc)
-            nent = AK.dowel_tangent(self.cout, self.cprop, self.chost, self.chw,
-                                    np.ascontiguousarray(glob), np.ascontiguousarray(gbar),
-                                    rows, cols, vals)
+            rows = np.empty(144 * nc, dtype=np.int64)
+            cols = np.empty(144 * nc, dtype=np.int64)
+            vals = np.empty(144 * nc)
+            nent = AK.dowel_tangent(self.cout, self.cprop, self.chost, self.chw, self.cgrad,
+                                    np.ascontiguousarray(glob), rows, cols, vals)
             if nent:
                 K.add(rows[:nent], cols[:nent], vals[:nent])
         if K.rank == 0:
@@ -476,22 +484,36 @@ class Anchors(Interaction):
             ia = K.index["anchors"]
             K.add(ia[rows[:nent]], ia[cols[:nent]], vals[:nent])
 
+    def set_state(self, state) -> None:
+        """As :meth:`Interaction.set_state`; a state saved before joint dowels existed
+        (no ``cw``, ``cwt``, ``cout``, ``dowel_work``) is taken when there are none."""
+        new = ("cw", "cwt", "cout", "dowel_work")
+        if self.n_cross == 0 and not all(k in state for k in new):
+            state = dict(state)
+            for k in new:
+                state.setdefault(k, getattr(self, k))
+        super().set_state(state)
+
     def commit(self) -> None:
         """Accept the trial bond and steel state."""
         self.es[:] = self.et
         self.ns[:] = self.nt
+        if self.n_cross:  # plastic work of the dowels: q · Δw_p (q = ±Q_y while it slips)
+            self.dowel_work[0] += float(np.dot(self.cout[:, AK.CO_Q], self.cwt - self.cw))
         self.cw[:] = self.cwt
 
     def energies(self) -> dict[str, float]:
         """Elastic energy of the bars, ½ Σ N² L0/(E A), and of the joint dowels, ½ Σ q²/K
-        [J], the part of the anchors' energy held now; bond and dissipated energies are not tracked (the work the
+        [J], the part of the anchors' energy held now; dissipated: the dowels' plastic
+        work Σ q Δw_p; bond and dissipated energies are not tracked (the work the
         anchors' forces do is in the solver's energy account)."""
         area = self.ep[:, AK.EP_AREA]
         bar = 0.5 * float(np.sum(self.axial**2 * self.L0 / (self.ep[:, AK.EP_E] * area)))
         dow = 0.5 * float(np.sum(self.cout[:, AK.CO_Q] ** 2 / np.maximum(self.cprop[:, 0],
                                                                           1e-300)))
-        return {"stored": bar + dow, "dissipated": 0.0, "bar_elastic": bar,
-                "dowel_elastic": dow}
+        return {"stored": bar + dow, "dissipated": float(self.dowel_work[0]),
+                "bar_elastic": bar, "dowel_elastic": dow,
+                "dowel_dissipated": float(self.dowel_work[0])}
 
     def lock_off(self) -> None:
         """Lock the jacked anchors off at their prestress and grout them (collective).
@@ -525,7 +547,7 @@ class Anchors(Interaction):
         """Back to the unloaded, unjacked state."""
         for arr in (self.u, self.v, self.f, self.es, self.et, self.ns, self.nt, self.dref,
                     self.axial, self.strain, self.bond_out, self.reaction, self.cw, self.cwt,
-                    self.cout):
+                    self.cout, self.dowel_work):
             arr[...] = 0.0
         self.jacking[:] = [self.anchors[k].prestress > 0 for k in self.elem_anchor]
         self.npr[:, AK.NP_BONDED] = 1.0 - self.jacking[self.helem]
