@@ -25,6 +25,7 @@ from masonry_fdem.interactions.anchors import (
     straight_anchor,
     wall_ties,
 )
+from masonry_fdem.interactions.anchors import _kernels as AK
 from masonry_fdem.assessment.layouts import intrados_stitch, radial_anchors
 from masonry_fdem.geometry import BlockMesh
 from masonry_fdem.solvers import DynamicRelaxation, ExplicitSolver
@@ -249,8 +250,6 @@ def test_sliding_joint_is_held_by_the_dowel_of_the_bar_across_it(comm):
     # slid 0.1 mm, five times the bridging element's length / 200: the dowel acts across
     # the bar as laid (B only translates), not across the element's turned chord
     assert dr.solve(0.0, displacement={"B": (0.0, 1e-4)}).converged
-    from masonry_fdem.interactions.anchors import _kernels as AK
-
     np.testing.assert_allclose(anchors.cout[0, [AK.CO_NX, AK.CO_NY]], [0.0, 1.0], atol=1e-12)
     assert anchors.dowel_results()["slip"][0] == pytest.approx(1e-4, rel=1e-9)
 
@@ -524,7 +523,6 @@ def test_bond_law_return_unloads_with_plastic_slip():
     """Kernel check: loading past the peak then unloading follows the initial stiffness
     from the envelope point reached; reverse loading meets the envelope at −τ_env of
     the accumulated slip."""
-    from masonry_fdem.interactions.anchors import _kernels as AK
 
     law = BondLaw((1e-4, 1e-3, 2e-3), (2e6, 2e6, 0.5e6))
     ls, lt = np.array(law.slip), np.array(law.stress)
