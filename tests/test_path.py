@@ -101,34 +101,33 @@ def test_parallel_collapse_load_is_that_of_one_process():
 
 
 def test_increment_stalled_above_the_tolerance_is_accepted_within_the_relaxed_one():
-    """The last resort of path following before *not converged*: the smallest arc-length
-    increment, its Newton iterations stalled above ``rtol``, is accepted at its best
-    iterate if that is within ``relaxed_rtol`` (and counted in the status). Forced here
-    by a tolerance below the force evaluation's round-off floor (rtol 1e-13; the floor of
-    this arch is ~1e-8 of the force norm), increments of 10 µm with no cut-back, to 0.8 mm: with
-    ``relaxed_rtol`` 1e-6 every increment is accepted relaxed and the trace reaches the
-    same peak (and status) as the run at rtol 1e-6 with the same increments, to 1e-5;
-    with ``relaxed_rtol`` = rtol (off) the run ends *not converged* at its first
-    increment."""
+    """With ``relaxed_rtol`` given, an arc-length increment whose Newton iterations stay
+    above ``rtol`` is accepted at its best iterate if that is within ``relaxed_rtol``
+    (and counted in the status).
+    Forced here by a tolerance below the force evaluation's round-off floor (rtol 1e-13;
+    the floor of this arch is ~1e-8 of the force norm): with ``relaxed_rtol`` 1e-6 every
+    increment is accepted relaxed and the trace passes the peak as the run at rtol 1e-6
+    does, to 2e-3 of the peak (measured 3.9e-4: the relaxed increments take all their
+    iterations and so do not grow as the reference's do; the peak falls between other
+    points of the path); without it (the default) the run ends *not converged* at its
+    first increment."""
     comm = MPI.COMM_WORLD
 
     def trace(rtol, relaxed):
         model, contact, _ = _quarter_span_arch(comm)
-        s = StaticSolver(model, interactions=contact, rtol=1e-6)
+        s = StaticSolver(model, interactions=contact, rtol=1e-6, relaxed_rtol=relaxed)
         assert s.settle().status is Status.LOAD_REACHED
-        s.rtol, s.relaxed_rtol = rtol, relaxed
-        return s.follow(1e-5, min_increment=1e-5, max_increment=1e-5,
-                        max_displacement=8e-4, dissipation=False), s
+        s.rtol, s.max_it = rtol, 8
+        return s.follow(8e-5, max_increment=64 * 8e-5, max_displacement=0.003), s
 
-    ref, _ = trace(1e-6, 1e-6)
+    ref, _ = trace(1e-6, None)
     run, s = trace(1e-13, 1e-6)
     print(f"\nrelaxed: {run.status.describe('N')}; at rtol 1e-6: {ref.status.describe('N')}")
-    assert run.status.status is ref.status.status is Status.MECHANISM
-    assert run.status.peak == pytest.approx(ref.status.peak, rel=1e-5)
-    assert len(run.loads) == len(ref.loads) == 81
+    assert run.status.status is Status.PEAK_PASSED is ref.status.status
+    assert run.status.peak == pytest.approx(ref.status.peak, rel=2e-3)
     assert s.relaxed == len(run.loads) - 1 > 10
     assert f"{s.relaxed} increment(s) accepted at a residual up to 1e-06" in run.status.detail
-    run, s = trace(1e-13, 1e-13)
+    run, s = trace(1e-13, None)
     assert run.status.status is Status.NOT_CONVERGED and len(run.loads) == 1
     assert s.relaxed == 0
 
