@@ -899,8 +899,8 @@ class StaticSolver:
                 if rn <= self.rtol * ref and abs(c) <= ctol * cscale:
                     converged, reason = True, "CONVERGED_FNORM_ABS"
                     break
-                if (abs(c) <= ctol * cscale and math.isfinite(rn)
-                        and (best is None or rn / ref < best[0])):
+                if (self.relaxed_rtol > self.rtol and abs(c) <= ctol * cscale
+                        and math.isfinite(rn) and (best is None or rn / ref < best[0])):
                     best = (rn / ref, x.copy(), lam)
                 if its >= self.max_it or not math.isfinite(rn):
                     reason = "DIVERGED_MAX_IT" if math.isfinite(rn) else "DIVERGED_FNORM_NAN"
