@@ -523,7 +523,6 @@ def test_bond_law_return_unloads_with_plastic_slip():
     """Kernel check: loading past the peak then unloading follows the initial stiffness
     from the envelope point reached; reverse loading meets the envelope at −τ_env of
     the accumulated slip."""
-
     law = BondLaw((1e-4, 1e-3, 2e-3), (2e6, 2e6, 0.5e6))
     ls, lt = np.array(law.slip), np.array(law.stress)
     res = np.zeros(3)

@@ -884,7 +884,9 @@ class StaticSolver:
                     dlam = (ds - g_now) / adq
                     x += dlam * dq
                     lam += dlam
-        best: tuple[float, np.ndarray, float] | None = None  # (|r|/ref, x, λ)
+        # the best iterate (|r|/ref, λ, x), kept only with relaxed acceptance on
+        best_rn, best_lam = math.inf, lam
+        x_best = np.empty_like(x) if self.relaxed_rtol > self.rtol else None
         if ok:
             rn = evaluate(x, lam)
             ref = self._reference()
@@ -899,9 +901,9 @@ class StaticSolver:
                 if rn <= self.rtol * ref and abs(c) <= ctol * cscale:
                     converged, reason = True, "CONVERGED_FNORM_ABS"
                     break
-                if (self.relaxed_rtol > self.rtol and abs(c) <= ctol * cscale
-                        and math.isfinite(rn) and (best is None or rn / ref < best[0])):
-                    best = (rn / ref, x.copy(), lam)
+                if x_best is not None and abs(c) <= ctol * cscale and rn / ref < best_rn:
+                    best_rn, best_lam = rn / ref, lam
+                    x_best[:] = x
                 if its >= self.max_it or not math.isfinite(rn):
                     reason = "DIVERGED_MAX_IT" if math.isfinite(rn) else "DIVERGED_FNORM_NAN"
                     break
@@ -951,13 +953,12 @@ class StaticSolver:
                     if uphill > max_uphill:
                         reason = "DIVERGED_LINE_SEARCH"
                         break
-        if (not converged and best is not None and self.relaxed_rtol > self.rtol
-                and best[0] <= self.relaxed_rtol):
+        if not converged and best_rn <= self.relaxed_rtol:
             # Newton orbits just above the tolerance (a point of a law at its kink
             # flipping branch from one iterate to the next): the best iterate, if within
             # the relaxed tolerance, is accepted
-            rn = evaluate(best[1], best[2])
-            x, lam = best[1], best[2]
+            rn = evaluate(x_best, best_lam)
+            lam = best_lam
             ref = self._reference()
             if rn <= self.relaxed_rtol * ref:
                 converged, reason = True, "CONVERGED_RELAXED"
