@@ -146,6 +146,11 @@ if comm.rank == 0:
               + "; ".join(f"below ring {x['layer']} {x['max_opening'] * 1e3:.3f} mm over "
                           f"{100 * x['span_fraction']:.0f} % at {x['load'] / 1e3:.1f} kN"
                           for x in r.ring_separation))
+        if r.ring_separation_at_peak:
+            print(f"  {name}: at its peak load: " + "; ".join(
+                f"below ring {x['layer']} {x['max_opening'] * 1e3:.3f} mm, separated over "
+                f"{100 * x['span_fraction']:.0f} % of the span"
+                for x in r.ring_separation_at_peak))
     if a.anchor_peaks:
         top = max(a.anchor_peaks, key=lambda x: x["force_max"])
         print(f"  largest bar force over the anchored run: {top['name']} "

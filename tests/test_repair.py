@@ -104,6 +104,16 @@ def test_anchoring_raises_the_ring_separated_arch_by_half(tmp_path_factory):
     assert summary["gain_kind"] == "not measured"
     assert summary["unstrengthened_collapse_load_N"] is None
     assert summary["anchored_status"]["status"] == "load reached"
+    # the layers between rings: at the peak load, and widest over the run
+    for r in (u, a):
+        layers = [x["layer"] for x in r.ring_separation]
+        assert layers == [1, 2]
+        assert [x["layer"] for x in r.ring_separation_at_peak] == layers
+        for at_peak, widest in zip(r.ring_separation_at_peak, r.ring_separation):
+            assert at_peak["load"] == r.peak_load
+            assert 0.0 <= at_peak["max_opening"] <= widest["max_opening"]
+    assert summary["anchored_ring_separation_at_peak"] == a.ring_separation_at_peak
+    assert "At the peak load" in (out / "anchored" / "report.md").read_text(encoding="utf-8")
 
 
 # the dry one-ring arch of tests/test_assess.py (LA load 5.11 kN), driven down at quarter

@@ -147,6 +147,8 @@ class Assessment:
             interface opened by more than ``threshold`` [m], 1e-3 × the ring thickness,
             beyond the self-weight state), and the ``load`` [N] and load-line
             ``displacement`` [m] there (empty for a single ring).
+        ring_separation_at_peak: the same keys per layer, in the state at the peak
+            load (while the arch is loaded up to its collapse load, before it falls).
     """
 
     case: str
@@ -173,6 +175,7 @@ class Assessment:
     stopped_under: str = "load"
     anchor_peaks: list[dict] = field(default_factory=list)
     ring_separation: list[dict] = field(default_factory=list)
+    ring_separation_at_peak: list[dict] = field(default_factory=list)
     #: the limit analysis's line of thrust: per ring, the points [m] where the resultant
     #: crosses each radial joint, springing to springing (empty without limit analysis)
     limit_thrust: list[list[tuple[float, float]]] = field(default_factory=list)
@@ -749,7 +752,8 @@ def assess(
         iters.append(int(iterations))
         opened, op = monitor.classify(an.hinge_opening)
         state["open"] = [(k, kind, side, load, disp, op[k]) for k, kind, side in opened]
-        for lay in rings.layers():
+        layers = rings.layers()
+        for lay in layers:
             best = separation.get(lay["layer"])
             if best is None or lay["max_opening"] > best["max_opening"]:
                 separation[lay["layer"]] = {**lay, "load": float(load),
@@ -775,6 +779,8 @@ def assess(
             snapshots["first hinge"] = (model.u.x.array.copy(), float(load), float(disp))
         if "peak load" not in snapshots or load > snapshots["peak load"][1]:
             snapshots["peak load"] = (model.u.x.array.copy(), float(load), float(disp))
+            state["separation_at_peak"] = [{**lay, "load": float(load),
+                                            "displacement": float(disp)} for lay in layers]
             state["fdem_thrust"] = thrust.lines(inter)
             if case.fill is not None and write:
                 # the load's path through the fill: σ_yy per cell at the peak
@@ -962,7 +968,8 @@ def assess(
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,
         anchor_length=0.0 if anchors is None else anchors.total_length,
         anchor_peaks=list(anchor_peaks.values()),
-        ring_separation=[separation[r] for r in sorted(separation)])
+        ring_separation=[separation[r] for r in sorted(separation)],
+        ring_separation_at_peak=list(state.get("separation_at_peak", [])))
     if vtx is not None:
         frame()
         vtx.close()

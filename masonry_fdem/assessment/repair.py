@@ -242,6 +242,8 @@ def _write_comparison(case: ArchCase, res: Comparison, tmp: Path) -> None:
         "anchor_peaks": r1.anchor_peaks,
         "unstrengthened_ring_separation": r0.ring_separation,
         "anchored_ring_separation": r1.ring_separation,
+        "unstrengthened_ring_separation_at_peak": r0.ring_separation_at_peak,
+        "anchored_ring_separation_at_peak": r1.ring_separation_at_peak,
     }
     (tmp / "summary.json").write_text(json.dumps(summary, indent=1))
 

@@ -394,6 +394,14 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
             lines.append(f"| {x['layer']} | {x['max_opening'] * 1e3:.3f} | "
                          f"{100 * x['span_fraction']:.0f} % of the span | "
                          f"{x['load'] / 1e3:.2f} | {x['displacement'] * 1e3:.3f} |")
+        if res.ring_separation_at_peak:
+            lines += ["", "At the peak load (the arch loaded up to its collapse load):", "",
+                      "| layer (below ring) | widest opening [mm] | separated over | at load "
+                      "[kN] | at load-line displacement [mm] |", "|---|---|---|---|---|"]
+            for x in res.ring_separation_at_peak:
+                lines.append(f"| {x['layer']} | {x['max_opening'] * 1e3:.3f} | "
+                             f"{100 * x['span_fraction']:.0f} % of the span | "
+                             f"{x['load'] / 1e3:.2f} | {x['displacement'] * 1e3:.3f} |")
     lines += ["", "## Load–displacement at the load line", "",
               "![load-displacement](load_displacement.png)", "",
               "## Hinge sequence", ""]
