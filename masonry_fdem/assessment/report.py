@@ -329,6 +329,18 @@ def status_text(res) -> str:
     return f"{res.status_line} ({d})" if d else res.status_line
 
 
+def _layers_table(layers) -> list[str]:
+    """The markdown table of the ring layers' openings (``Assessment.ring_separation``
+    or ``ring_separation_at_peak``)."""
+    out = ["| layer (below ring) | widest opening [mm] | separated over | at load [kN] | "
+           "at load-line displacement [mm] |", "|---|---|---|---|---|"]
+    for x in layers:
+        out.append(f"| {x['layer']} | {x['max_opening'] * 1e3:.3f} | "
+                   f"{100 * x['span_fraction']:.0f} % of the span | "
+                   f"{x['load'] / 1e3:.2f} | {x['displacement'] * 1e3:.3f} |")
+    return out
+
+
 def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     a, ld = case.arch, case.loading
     kn = res.peak_load / 1e3
@@ -387,21 +399,11 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
         lines += ["", "## Ring separation", "",
                   f"Widest opening of each layer between rings over the run, and the part "
                   f"of the span separated then (opened by more than {thr * 1e3:.2f} mm, "
-                  "1e-3 of the ring thickness, beyond the self-weight state):", "",
-                  "| layer (below ring) | widest opening [mm] | separated over | at load "
-                  "[kN] | at load-line displacement [mm] |", "|---|---|---|---|---|"]
-        for x in res.ring_separation:
-            lines.append(f"| {x['layer']} | {x['max_opening'] * 1e3:.3f} | "
-                         f"{100 * x['span_fraction']:.0f} % of the span | "
-                         f"{x['load'] / 1e3:.2f} | {x['displacement'] * 1e3:.3f} |")
+                  "1e-3 of the ring thickness, beyond the self-weight state):", ""]
+        lines += _layers_table(res.ring_separation)
         if res.ring_separation_at_peak:
-            lines += ["", "At the peak load (the arch loaded up to its collapse load):", "",
-                      "| layer (below ring) | widest opening [mm] | separated over | at load "
-                      "[kN] | at load-line displacement [mm] |", "|---|---|---|---|---|"]
-            for x in res.ring_separation_at_peak:
-                lines.append(f"| {x['layer']} | {x['max_opening'] * 1e3:.3f} | "
-                             f"{100 * x['span_fraction']:.0f} % of the span | "
-                             f"{x['load'] / 1e3:.2f} | {x['displacement'] * 1e3:.3f} |")
+            lines += ["", "At the peak load (the arch loaded up to its collapse load):", ""]
+            lines += _layers_table(res.ring_separation_at_peak)
     lines += ["", "## Load–displacement at the load line", "",
               "![load-displacement](load_displacement.png)", "",
               "## Hinge sequence", ""]
