@@ -114,6 +114,27 @@ def test_missing_material():
     assert "materials: no material 'brick' (used by arch.voussoir_material)" in msg
 
 
+def test_softening_integration_reaches_the_joints():
+    """``[analysis] softening``: "implicit" by default, "imex" sets the joints' IMEX
+    integration (their strengths then come from the extrapolation, not the materials),
+    anything else is named."""
+    from masonry_fdem.assessment.assess import build_model
+    from masonry_fdem.interactions.joints import _kernels as JK
+
+    assert load_case(example()).analysis.softening == "implicit"
+    data = example()
+    data.setdefault("analysis", {})["softening"] = "imex"
+    case = load_case(data)
+    assert case.analysis.softening == "imex"
+    _, inter, _ = build_model(case, MPI.COMM_WORLD)
+    joints = next(i for i in inter if i.name == "joints")
+    assert joints.imex
+    ipmat, props = joints._law()
+    assert np.isinf(props[:, JK.P_GF1]).all()  # the law's own softening is off
+    data["analysis"]["softening"] = "explicit"
+    assert "analysis.softening" in problems_of(data)
+
+
 @pytest.mark.parametrize(
     ("key", "value", "expected"),
     [("position", 1.3, "loading.position: 1.3 is off the arch (0..1 of the span)"),

@@ -324,6 +324,7 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     table = {k: bond(v) for k, v in case.joint_materials().items()}
     rules = [(where, bond(jm)) for where, jm in case.joint_rules(layout)]
     joints = Joints(model, table, where=rules, contact=contact)
+    joints.set_softening(case.analysis.softening)
     specs = case.anchors()
     anchors = Anchors(model, specs) if specs else None
     return model, [contact, joints], anchors

@@ -108,7 +108,12 @@ Schema (``*``: required):
     displacement reached) to find the peak and the post-peak branch;
     ``paraview_every`` (10): the run folder's ParaView series (``paraview/model.pvd`` and
     the ADIOS2 ``.bp`` files; time = increment number) gets the state under self-weight,
-    every that many converged increments and the last one (0: none).
+    every that many converged increments and the last one (0: none); ``softening``
+    "implicit" (default: backward Euler, the law's own softening in every Newton
+    iteration) or "imex" (the joints' softening implicit–explicit, Oliver et al. 2008:
+    strengths held within an increment at values extrapolated from the last two, so
+    Newton cannot cycle between a softening point and its unloading; an error of the
+    first order in the increment — see docs/design.md, "IMEX softening").
 ``[checks]``
     ``allow``: keys (``"materials.brick.E"``) whose magnitude checks are switched off.
 ``[[anchors]]``

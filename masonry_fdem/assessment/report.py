@@ -459,7 +459,10 @@ def _solver_text(case) -> str:
     an = case.analysis
     if an.solver == "newton":
         return (f"Newton (PETSc SNES, MUMPS), arc length on the load-line displacement; "
-                f"equilibrium to {an.newton_rtol:g} of the forces")
+                f"equilibrium to {an.newton_rtol:g} of the forces"
+                + ("; the joints' softening implicit–explicit (IMEX: strengths held at "
+                   "values extrapolated from the last two increments)"
+                   if an.softening == "imex" else ""))
     return (f"dynamic relaxation, {case.loading.control.value} control; equilibrium to "
             f"{an.dr_rtol:g} of the forces within {an.max_iterations} iterations")
 

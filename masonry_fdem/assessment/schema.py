@@ -262,6 +262,7 @@ class AnalysisModel(_Table):
     newton_iterations: integer(ge=1) = 25
     newton_steps: integer(ge=1) = 400
     paraview_every: integer(ge=0) = 10
+    softening: Literal["implicit", "imex"] = "implicit"
 
 
 class SteelModel(_Table):

@@ -195,6 +195,7 @@ class AnalysisSpec:
     newton_iterations: int = 25
     newton_steps: int = 400
     paraview_every: int = 10
+    softening: str = "implicit"
 
 
 @dataclass(frozen=True)

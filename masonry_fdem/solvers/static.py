@@ -493,6 +493,15 @@ class StaticSolver:
         for c in self.interactions:
             c.commit()
 
+    def _extrapolation(self, ratio: float) -> None:
+        """Tell the interactions that integrate a softening implicit–explicit (the
+        joints' ``set_softening("imex")``) the next increment's size over the last
+        committed one's (their extrapolation factor; 1 outside path following)."""
+        for c in self.interactions:
+            f = getattr(c, "set_extrapolation", None)
+            if f is not None:
+                f(ratio)
+
     def restore(self) -> None:
         """Back to the committed state (the displacements of every set; the interactions'
         trial states), forces evaluated there (collective)."""
@@ -1339,6 +1348,7 @@ class StaticSolver:
         # (Δx, Δλ, its a·Δx), scaled to the next one (see _arc_increment)
         x_start = np.zeros(self.n_local)
         secant: tuple[np.ndarray, float, float] | None = None
+        ds_last = float(increment)  # the last committed increment of the measure
         if resume is not None:
             if resume.get("control") != control:
                 raise ValueError(f"the path state is of {resume.get('control')!r} control, "
@@ -1350,6 +1360,7 @@ class StaticSolver:
                                     "astray", "diss", "step", "steps", "secant"))
             if control == "displacement":
                 d0 = resume["d0"]
+            ds_last = float(resume.get("ds_last", increment))
         while steps < max_steps:
             d_now = run.displacements[-1]
             self._gather(x_start)
@@ -1358,6 +1369,7 @@ class StaticSolver:
             ds = min(step, max_displacement - d_now) if math.isfinite(max_displacement) else step
             if ds <= 1e-12 * max(abs(max_displacement), 1.0):
                 break
+            ds_used = ds  # its size, if it moved the measure
             in_snap = diss is not None
             dissipating = False  # this increment dissipated in the joints' own account
             if control == "arc-length" and in_snap:
@@ -1369,13 +1381,16 @@ class StaticSolver:
                 # control, at the fraction that worked last (grown after an easy
                 # increment: up to twice ``easy_iterations``, the constraint being
                 # nonlinear)
-                res, _ = self._arc_increment(min(dmin, ds), a, q)
+                ds_used = min(dmin, ds)
+                self._extrapolation(ds_used / ds_last)
+                res, _ = self._arc_increment(ds_used, a, q)
                 plain = res.converged
                 if res.converged:
                     in_snap = False
                     diss, step = None, dmin
                 else:
                     run.results.append(res)
+                    self._extrapolation(1.0)
                     tried, frac, dissipating = self._dissipation_step(
                         q, 0.5 * abs(run.loads[-1]) * d_now, (diss, diss / 4.0, diss / 16.0))
                     run.results.extend(tried[:-1])
@@ -1389,6 +1404,7 @@ class StaticSolver:
                 if secant is not None and secant[2] > 0.0:
                     f = ds / secant[2]
                     pred = (f * secant[0], f * secant[1])
+                self._extrapolation(ds / ds_last)
                 res, _ = self._arc_increment(ds, a, q, predictor=pred)
                 if not res.converged and pred is not None:
                     # then the tangent's predictor
@@ -1402,6 +1418,7 @@ class StaticSolver:
                     # control; else find the state a jack holding the displacement
                     # would jump to (the load drops at the next displacement)
                     run.results.append(res)
+                    self._extrapolation(1.0)
                     tried, frac, dissipating = self._dissipation_step(
                         q, 0.5 * abs(run.loads[-1]) * d_now)
                     run.results.extend(tried[:-1])
@@ -1417,6 +1434,7 @@ class StaticSolver:
             else:
                 target = d0 + sign * (d_now + ds)
                 disp = {prescription: (target, None) if component == 0 else (None, target)}
+                self._extrapolation(ds / ds_last)
                 res = None
                 if secant is not None and secant[2] > 0.0:
                     # start from the previous increment's step, scaled: a drive that
@@ -1449,6 +1467,7 @@ class StaticSolver:
                 continue
             steps += 1
             if plain:
+                ds_last = ds_used
                 x_now = np.zeros(self.n_local)
                 self._gather(x_now)
                 dx = x_now - x_start
@@ -1524,7 +1543,8 @@ class StaticSolver:
                     "peak": peak, "k0": k0, "k_last": k_last, "switched": switched,
                     "jumped": jumped, "d_far": d_far, "stall": stall, "fallen": fallen,
                     "astray": astray, "diss": diss, "step": step, "steps": steps,
-                    "secant": secant, "d0": d0 if control == "displacement" else None})
+                    "secant": secant, "ds_last": ds_last,
+                    "d0": d0 if control == "displacement" else None})
         if status is None:
             lam = run.loads[-1]
             d = run.displacements[-1]
@@ -1545,6 +1565,7 @@ class StaticSolver:
                 status = RunStatus(Status.DISPLACEMENT_LIMIT, lam, peak, None,
                                    f"max_displacement = {max_displacement:.4g} m reached "
                                    f"(current stiffness parameter {sp:.2g})")
+        self._extrapolation(1.0)
         relaxed = self.relaxed - relaxed0
         if relaxed:
             status = dataclasses.replace(

@@ -656,6 +656,46 @@ def commit(alive, s0, s1):
 
 
 @njit(cache=True)
+def explicit_softening_props(props, ipmat, s0, kprev, rho, out):
+    """Per-point properties with the softening frozen at extrapolated values (the
+    implicit–explicit, IMEX, integration of Oliver, Huespe & Cante 2008, "An
+    implicit/explicit integration scheme to increase computability of non-linear
+    material and contact/friction problems", CMAME 197, applied to the softening
+    variables): κ̃ = κ_n + ρ (κ_n − κ_{n−1}) from the last two committed states, and
+    the strengths of the increment are those at κ̃ — f_t R(κ̃), c R(κ̃) and σ̄_c(κ̃3) —
+    held fixed: within an increment the law is perfectly plastic, so no point can
+    switch between a softening branch and its elastic unloading from one Newton
+    iteration to the next. (The committed state is then written by the implicit
+    return mapping at the converged displacement, see ``Joints.commit``.)
+
+    Args:
+        props: (k, N_PROPS) the materials; ipmat: (m,) each point's row.
+        s0: (m, N_STATE) committed state; kprev: (m, 3) κ1, κ2, κ3 one commit before.
+        rho: the extrapolation factor, Δt_{n+1}/Δt_n (≥ 0).
+        out: (m, N_PROPS) written: each point's row, softening frozen (G_fI, G_fII and
+            κ_p infinite, so the law's own softening is off; f_c is 3 σ̄_c(κ̃3), the
+            cap's initial strength being f_c/3).
+    """
+    for q in range(ipmat.shape[0]):
+        p = props[ipmat[q]]
+        for j in range(N_PROPS):
+            out[q, j] = p[j]
+        k1 = s0[q, S_K1] + rho * max(s0[q, S_K1] - kprev[q, 0], 0.0)
+        k2 = s0[q, S_K2] + rho * max(s0[q, S_K2] - kprev[q, 1], 0.0)
+        k3 = s0[q, S_K3] + rho * max(s0[q, S_K3] - kprev[q, 2], 0.0)
+        if p[P_FT] > 0.0 or p[P_C] > 0.0:
+            # (never exactly 0: a spent joint stays a plastic opening, not a gap)
+            r = max(softening_factor(p, k1, k2), 1e-200)
+            out[q, P_FT] = p[P_FT] * r
+            out[q, P_C] = p[P_C] * r
+        out[q, P_GF1] = math.inf
+        out[q, P_GF2] = math.inf
+        if p[P_FC] > 0.0:
+            out[q, P_FC] = 3.0 * cap_strength(p, k3)
+            out[q, P_KP] = math.inf
+
+
+@njit(cache=True)
 def node_spring_bound(ipa, ipb, xia, xib, w, ipmat, props, alive, k):
     """Per node Σ_ip max(k_n, k_s) w N_i [N/m] (k: (n,), added to)."""
     for q in range(ipa.shape[0]):
@@ -696,5 +736,7 @@ def precompile() -> None:
                     np.zeros(1, np.bool_))
     node_spring_bound(ip, ip, half, half, half, np.zeros(1, np.int64), props, alive,
                       np.zeros(4))
+    out = np.zeros((1, N_PROPS))
+    explicit_softening_props(props, np.zeros(1, np.int64), s0, np.zeros((1, 3)), 1.0, out)
     interface_law(props[0], 2.0, 1.0, s0[0], s1[0])
     interface_law(props[0], -2.0, 0.5, s0[0], s1[0])

@@ -247,7 +247,8 @@ class Joints(Interaction):
     """
 
     name = "joints"
-    state_attributes = ("s0", "s1", "alive", "released", "n_commits", "energy")
+    state_attributes = ("s0", "s1", "alive", "released", "n_commits", "energy", "kprev",
+                        "imex_ratio")
 
     def __init__(
         self,
@@ -408,6 +409,14 @@ class Joints(Interaction):
         self.s1 = JK.empty_state(m)
         self.energy = np.zeros(2)
         self.n_commits = 0
+        #: softening integrated implicit–explicit (:meth:`set_softening`)
+        self.imex = False
+        #: κ1, κ2, κ3 of each point one commit before (the IMEX extrapolation)
+        self.kprev = np.zeros((m, 3))
+        #: the IMEX extrapolation factor Δt_{n+1}/Δt_n of the next increment
+        self.imex_ratio = 1.0
+        self._props_x = np.zeros((m, JK.N_PROPS))
+        self._ipmat_x = np.arange(m, dtype=self.ipmat.dtype)
         self.released = np.zeros(nseg, dtype=bool)
         self.seg_blocks = np.c_[fblock[fa], fblock[fb]]
         self._tell_contact()
@@ -489,6 +498,51 @@ class Joints(Interaction):
         """Bound of Σ_j |K_ij| [N/m] of the joint springs into the block rows."""
         rows[BLOCKS] += np.repeat(2.0 * math.sqrt(2.0) * self._local_node_bound(), 2)
 
+    def set_softening(self, integration: str) -> None:
+        """How the softening of the joints' law is integrated in a static increment:
+
+        * ``"implicit"`` (the default): backward Euler, every force evaluation returning
+          from the committed state with the law's own softening (the consistent
+          tangent of the softening branch);
+        * ``"imex"``: implicit–explicit (Oliver, Huespe & Cante 2008): the softening
+          variables of the increment are extrapolated from the last two committed states
+          (:func:`._kernels.explicit_softening_props`) and the strengths held there, so
+          within the increment the law is perfectly plastic and Newton cannot cycle
+          between a point's softening branch and its unloading; at a converged increment
+          the committed state is the implicit return mapping at the converged
+          displacement. The error is of the first order in the increment (the softening
+          lags one increment): halve the increment to check it.
+        """
+        if integration not in ("implicit", "imex"):
+            raise ValueError(f"softening integration must be 'implicit' or 'imex', got "
+                             f"{integration!r}")
+        on = integration == "imex"
+        if on and not self.imex:
+            self.kprev[:] = self.s0[:, [JK.S_K1, JK.S_K2, JK.S_K3]]
+        self.imex = on
+        self._extrapolate()
+
+    def set_extrapolation(self, ratio: float) -> None:
+        """The IMEX extrapolation factor of the next increment, its size over the last
+        committed one's (≥ 0; no effect under implicit integration)."""
+        if not (math.isfinite(ratio) and ratio >= 0):
+            raise ValueError(f"extrapolation ratio must be finite and >= 0, got {ratio}")
+        if ratio != self.imex_ratio:
+            self.imex_ratio = float(ratio)
+            self._extrapolate()
+
+    def _extrapolate(self) -> None:
+        if self.imex:
+            JK.explicit_softening_props(self.props, self.ipmat, self.s0, self.kprev,
+                                        self.imex_ratio, self._props_x)
+
+    def _law(self) -> tuple[np.ndarray, np.ndarray]:
+        """(ipmat, props) the force kernels use: the materials, or under IMEX each
+        point's row with its strengths frozen."""
+        if self.imex:
+            return self._ipmat_x, self._props_x
+        return self.ipmat, self.props
+
     def _point_forces(self, u: np.ndarray) -> None:
         """Each point's forces into ``fq`` at the block displacements ``u`` (this rank's
         nodes; the ghosts' exchanged; trial state; collective)."""
@@ -497,8 +551,9 @@ class Joints(Interaction):
         if self.exchange is not None:
             self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
             self.u[nloc:] = self._ghost_u.ravel()
+        ipmat, props = self._law()
         JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
-                        self.ipmat, self.props, self.alive, self.counted, self.s0, self.s1,
+                        ipmat, props, self.alive, self.counted, self.s0, self.s1,
                         self.fq, self.energy)
 
     def add_forces(self, state: State) -> None:
@@ -517,8 +572,9 @@ class Joints(Interaction):
         rows = np.empty(64 * m, dtype=np.int64)
         cols = np.empty(64 * m, dtype=np.int64)
         vals = np.empty(64 * m)
+        ipmat, props = self._law()
         nent = JK.joint_tangent(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib,
-                                self.w, self.ipmat, self.props,
+                                self.w, ipmat, props,
                                 self.alive * self._counted_i8, self.s0,
                                 JK.FD_STEP, rows, cols, vals)
         dofs = K.node_dofs(self.ext_input)
@@ -534,8 +590,9 @@ class Joints(Interaction):
             self.exchange.forward(self.u[:nloc].reshape(-1, 2), self._ghost_u)
             self.u[nloc:] = self._ghost_u.ravel()
         g = np.zeros_like(self.f)
+        ipmat, props = self._law()
         d = JK.dissipation_gradient(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib,
-                                    self.w, self.ipmat, self.props,
+                                    self.w, ipmat, props,
                                     self.alive * self._counted_i8, self.s0,
                                     JK.FD_STEP, g)
         out = np.zeros(state.u[BLOCKS].size)
@@ -550,8 +607,17 @@ class Joints(Interaction):
         Every ``check_every`` commits, broken open segments (and segments slid by more than
         half their length) are handed over to the block contact (collective).
         """
+        if self.imex:
+            # the implicit return mapping at the converged displacement (the last
+            # evaluated) writes the state committed; its κ's drive the next extrapolation
+            JK.joint_forces(self.X, self.u, self.ipa, self.ipb, self.xia, self.xib, self.w,
+                            self.ipmat, self.props, self.alive, self.counted, self.s0,
+                            self.s1, self.fq, self.energy)
+            live = self.alive != 0
+            self.kprev[live] = self.s0[live][:, [JK.S_K1, JK.S_K2, JK.S_K3]]
         JK.commit(self.alive, self.s0, self.s1)
         self.n_commits += 1
+        self._extrapolate()
         if self.n_commits % self.check_every == 0:
             self._hand_over()
 
@@ -604,6 +670,7 @@ class Joints(Interaction):
         other = np.arange(JK.N_PROPS) != JK.P_TANPHI
         rows = np.flatnonzero(np.all(self.props[:, other] == ref[other], axis=1))
         self.props[rows, JK.P_TANPHI] = float(tan_phi)
+        self._extrapolate()
         return int(rows.size)
 
     # ------------------------------------------------------------------ results
@@ -616,6 +683,7 @@ class Joints(Interaction):
 
     def _state_changed(self) -> None:
         self._tell_contact()
+        self._extrapolate()
 
     def _gather(self, cols) -> np.ndarray:
         """(n_points, len(cols)) committed state columns on every rank, global order."""
