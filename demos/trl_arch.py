@@ -82,12 +82,18 @@ def study(case, out: Path) -> None:
     rows = []
     for label, c in variants(case):
         t = time.perf_counter()
-        r = compare(c, out=out / label.replace(" ", "_").replace("(", "").replace(")", ""),
-                    overwrite=True, progress=False, comm=comm)
+        try:
+            r = compare(c, out=out / label.replace(" ", "_").replace("(", "").replace(")", ""),
+                        overwrite=True, progress=False, comm=comm)
+        except RuntimeError as e:  # (no equilibrium under self-weight, on both ranks)
+            rows.append((label, None, None, None, time.perf_counter() - t, str(e)))
+            if comm.rank == 0:
+                print(f"  {label}: {e}", flush=True)
+            continue
         u, a = r.unstrengthened, r.anchored
         ratio = (a.collapse_load / u.collapse_load
                  if a.collapse_load is not None and u.collapse_load is not None else None)
-        rows.append((label, u, a, ratio, time.perf_counter() - t))
+        rows.append((label, u, a, ratio, time.perf_counter() - t, ""))
         if comm.rank == 0:
             print(f"  {label}: {u.status_line} | {a.status_line} | ratio "
                   f"{'none' if ratio is None else f'{ratio:.3f}'}", flush=True)
@@ -107,7 +113,10 @@ def study(case, out: Path) -> None:
         kind = "collapse" if r.collapse_load is not None else "lower bound"
         return f"{r.peak_load / 1e3:.2f} kN ({r.peak_load / TONNE:.2f} t), {kind}"
 
-    for label, u, a, ratio, dt in rows:
+    for label, u, a, ratio, dt, err in rows:
+        if err:
+            lines.append(f"| {label} | {err} | – | – | – | {dt:.0f} |")
+            continue
         rs = "–" if ratio is None else f"{ratio:.3f}"
         ch = ("–" if ratio is None or base is None
               else f"{100 * (ratio / base - 1):+.1f} %")
