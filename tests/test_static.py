@@ -264,3 +264,34 @@ def test_newton_starved_of_iterations_is_not_converged_and_gives_no_collapse_loa
     assert run.collapse_load_factor is None
     assert run.status.lower_bound == max(run.load_factors)
     assert "not converged" in run.status.describe()
+
+
+def test_settle_resumed_from_a_partial_weight_reaches_the_same_state():
+    """``settle(resume=True)`` goes on from the dead-load fraction committed last (as
+    ``assess`` does after releasing a fill's interfaces where a settle stopped): a
+    cantilever under its own weight, settled from half of it, ends where a settle from
+    zero ends (elastic: one equilibrium), to 1e-5 of the tip deflection (each settle
+    stops at rtol = 1e-6 of the forces: measured 9e-7 apart), with the half weight's
+    deflection half the full one's."""
+    def model():
+        lay = BlockLayout((rectangle(0.0, 0.0, 2.0, 0.2),), ("brick",), ("beam",))
+        m = Model(lay.mesh(0.1, MPI.COMM_SELF), {"brick": Material(2000.0, 1e9, 0.2)},
+                  comm=MPI.COMM_SELF)
+        m.fix(lambda X: np.isclose(X[0], 0.0), name="clamp")
+        m.add_gravity()
+        return m
+
+    m0 = model()
+    s0 = StaticSolver(m0)
+    assert s0.settle().status is Status.LOAD_REACHED
+    m1 = model()
+    s1 = StaticSolver(m1)
+    s1.dead_factor = 0.5
+    assert s1.solve(0.0).converged
+    tip = int(np.argmin(np.hypot(m1.X[:, 0] - 2.0, m1.X[:, 1] - 0.2)))
+    half = float(m1.u.x.array[2 * tip + 1])
+    st = s1.settle(resume=True)
+    assert st.status is Status.LOAD_REACHED and s1.dead_factor == 1.0
+    full = float(m0.u.x.array[2 * tip + 1])
+    assert full < 0 and half == pytest.approx(0.5 * full, rel=1e-2)
+    assert np.allclose(m1.u.x.array, m0.u.x.array, rtol=0, atol=1e-5 * abs(full))

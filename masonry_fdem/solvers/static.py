@@ -575,13 +575,16 @@ class StaticSolver:
 
     # ------------------------------------------------------------------ load stepping
     def settle(self, steps: int = 8, *, min_fraction: float = 1.0 / 256.0, grow: float = 1.5,
-               easy_iterations: int = 5) -> RunStatus:
+               easy_iterations: int = 5, resume: bool = False) -> RunStatus:
         """Apply the dead loads (self-weight) from zero in increments, from the
         committed state, at the current live-load factor: a structure of blocks that
         only touch at the start has no contact stiffness yet, and a full first Newton
         step overshoots (the stiffer the contact, the worse). An increment that fails is
         undone and halved, one that converges in at most ``easy_iterations`` lets the
         next grow ``grow`` times; below ``min_fraction`` the run stops.
+
+        ``resume``: go on from the fraction committed last (:attr:`dead_factor`, say
+        after a failed settle and a change that may let it pass) instead of from zero.
 
         Returns:
             *load reached* with the dead loads in full, or *not converged* at the dead-
@@ -590,8 +593,8 @@ class StaticSolver:
         """
         if steps < 1:
             raise ValueError(f"steps must be >= 1, got {steps}")
-        done, df = 0.0, 1.0 / steps
-        self.dead_factor = 0.0
+        done, df = (self.dead_factor if resume else 0.0), 1.0 / steps
+        self.dead_factor = done
         lam = self.load_factor
         while done < 1.0 - 1e-12:
             trial = min(1.0, done + df)
