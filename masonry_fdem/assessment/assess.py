@@ -260,29 +260,34 @@ def _settle(solver, joints, case: ArchCase) -> RunStatus:
         return solver.settle()
     jf = case.fill.interface()
     mu = jf.tan_phi
+
+    def release(f: float) -> tuple[float, object]:
+        """Halve tan δ from ``f`` down to μ, each an equilibrium; (the last tan δ set,
+        the failed solve's reason or None)."""
+        while f > mu:
+            f = max(mu, 0.5 * f)
+            joints.set_friction(jf, f)
+            r = solver.solve(solver.load_factor)
+            if not r.converged:
+                return f, r.reason
+        return f, None
+
     f = max(10.0, 4.0 * mu)
     joints.set_friction(jf, f)
     st = solver.settle()
     if st.status is not Status.LOAD_REACHED:
         # held stuck, the fill found no equilibrium at some fraction of its weight (the
         # TRL case with its triangles halved: at 0.53): release the interfaces to their
-        # own friction in halving steps where it stands, then go on with the rest of
-        # the weight
-        while f > mu:
-            f = max(mu, 0.5 * f)
-            joints.set_friction(jf, f)
-            if not solver.solve(solver.load_factor).converged:
-                break
-        else:
+        # own friction where it stands, then go on with the rest of the weight
+        f, why = release(f)
+        if why is None:
             st = solver.settle(resume=True)
-    while st.status is Status.LOAD_REACHED and f > mu:
-        f = max(mu, 0.5 * f)
-        joints.set_friction(jf, f)
-        r = solver.solve(solver.load_factor)
-        if not r.converged:
+    if st.status is Status.LOAD_REACHED:
+        f, why = release(f)
+        if why is not None:
             st = RunStatus(Status.NOT_CONVERGED, st.load, st.peak, f,
                            f"the fill's interfaces released to tan δ = {f:.3g}: Newton did "
-                           f"not converge ({r.reason})")
+                           f"not converge ({why})")
     joints.set_friction(jf, mu)  # (a failure falls back on dynamic relaxation)
     return st
 
