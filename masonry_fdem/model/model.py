@@ -15,6 +15,7 @@ Units are SI: lengths [m], forces [N], stresses [Pa], masses [kg], time [s].
 from __future__ import annotations
 
 import fnmatch
+import math
 import logging
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -311,6 +312,24 @@ class Model:
         if np.any(self.mass <= 0):
             raise ValueError("a node has zero lumped mass (degenerate element?)")
         self.minv = 1.0 / self.mass
+
+    def scale_inertia(self, factor: float) -> None:
+        """Density scaling for quasi-static explicit runs: multiply every block's inertia
+        (the lumped mass, and the density in the elements' stable-step bound) by
+        ``factor`` ≥ 1, leaving the loads as they are (self-weight already added keeps
+        the true weight; gravity added afterwards would be scaled too). The critical
+        time step grows by √factor; the equilibrium states do not change, only how the
+        blocks get there. Not for dynamics.
+
+        Raises:
+            ValueError: ``factor`` not finite or below 1.
+        """
+        if not (math.isfinite(factor) and factor >= 1.0):
+            raise ValueError(f"inertia scale factor must be finite and >= 1, got {factor}")
+        for c in self.rho.values():
+            c.value = c.value * factor
+        self.mass *= factor
+        self.minv /= factor
 
     def _assemble(self, form) -> np.ndarray:
         vec = dolfinx.fem.assemble_vector(dolfinx.fem.form(form))
