@@ -117,6 +117,10 @@ def main() -> None:
     ap.add_argument("--increment", type=float, default=10e3, help="load step [N]")
     ap.add_argument("--max-steps", type=int, default=400_000,
                     help="explicit steps allowed per load")
+    ap.add_argument("--surfacing", type=float, default=0.0,
+                    help="thickness [m] of a road layer over the disks, within the cover "
+                         "(a bituminous surfacing on a granular road base, Mohr–Coulomb: "
+                         "E 1 GPa, c 100 kPa, φ 35°, as cases/bridge_two_span.toml)")
     ap.add_argument("--cell", type=float, default=0.2,
                     help="width of the stress-averaging cells [m]")
     args = ap.parse_args()
@@ -129,9 +133,15 @@ def main() -> None:
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    b = DiskFillBridge(case, count=args.count, comm=comm)
+    from masonry_fdem.materials import MohrCoulomb
+
+    road = MohrCoulomb(density=2300.0, E=1e9, nu=0.3, c=100e3, phi=35.0)
+    b = DiskFillBridge(case, count=args.count, surfacing=args.surfacing,
+                       surfacing_material=road if args.surfacing > 0 else None, comm=comm)
     say(f"{case.name}: load at {case.loading.position:g} of the span on a "
-        f"{case.loading.spreader_width:g} m beam; {b.disks.n} disks packed (r "
+        f"{case.loading.spreader_width:g} m beam"
+        + (f" on {args.surfacing:g} m of surfacing" if args.surfacing > 0 else "")
+        + f"; {b.disks.n} disks packed (r "
         f"{b.disks.r.min() * 1e3:.1f}..{b.disks.r.max() * 1e3:.1f} mm), {comm.size} "
         f"rank(s); blocks' inertia ×{b.inertia_scale:.0f} (density scaling)", flush=True)
     if not b.settle():
@@ -140,7 +150,8 @@ def main() -> None:
         return
     say(f"settled: {b.trimmed} disks trimmed above the road, {b.disks.n} left; "
         f"{b.steps_held} + {b.steps_free} steps ({time.perf_counter() - t0:.0f} s); "
-        f"the fill's surface under the beam {b.surface:.3f} m (road {b.road:.3f} m)",
+        f"the disks' top under the {'surfacing' if args.surfacing > 0 else 'beam'} "
+        f"{b.surface:.3f} m (asked {b.fill_top:.3f} m)",
         flush=True)
     last = {}
 

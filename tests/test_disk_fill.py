@@ -94,6 +94,10 @@ def test_bad_input():
         DiskFillBridge(case, count=150, overfill=-0.1)
     with pytest.raises(ValueError, match="local_damping"):
         DiskFillBridge(case, count=150, local_damping=1.0)
+    with pytest.raises(ValueError, match="surfacing must be"):
+        DiskFillBridge(case, count=150, surfacing=0.2)  # as thick as the cover
+    with pytest.raises(ValueError, match="surfacing_material"):
+        DiskFillBridge(case, count=150, surfacing=0.05)
     b = DiskFillBridge(case, count=150)
     with pytest.raises(RuntimeError, match="settle"):
         b.load(INCREMENT)

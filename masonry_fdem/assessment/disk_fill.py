@@ -6,8 +6,8 @@ voussoirs, mortar joints and block contact as :func:`~masonry_fdem.assessment.as
 has them), with the fill region packed by rigid disks instead of the Mohr–Coulomb
 continuum (:func:`~masonry_fdem.interactions.disks.fill.fill_disks`; the disks' solid
 density is the fill's bulk density over 1 − porosity), two fixed end walls, and a guided
-steel loading beam on the road at the case's load position (``loading.spreader_width``
-wide). Disks touch the blocks through :class:`~masonry_fdem.interactions.DiskBlockContact`
+loading beam on the road at the case's load position (``loading.spreader_width`` wide),
+bearing on the disks or, optionally, on a road layer (``surfacing``) over them. Disks touch the blocks through :class:`~masonry_fdem.interactions.DiskBlockContact`
 with the fill's interface friction tan δ.
 
 Why explicit dynamics and not Newton: a disk packing has no tangent worth the name (its
@@ -101,6 +101,13 @@ class DiskFillBridge:
         overfill: the region is packed this fraction of the fill's depth above the road,
             settled on the held arch, and the disks whose centres then lie above the road
             removed (a loose packing settles; the road stays where the case has it).
+        surfacing: thickness [m] of a road layer on the disks (default none: the beam
+            bears on the disks), part of the case's ``cover``: one block from end wall to
+            end wall (1 cm clear of each), in plane strain, touching the disks with the
+            fill's interface friction and the beam with the block contact's.
+        surfacing_material: its :class:`~masonry_fdem.materials.Material` (e.g. a
+            :class:`~masonry_fdem.materials.MohrCoulomb` road base), needed with a
+            surfacing.
 
     Raises:
         ValueError: the case has no ``[fill]``, or bad packing input.
@@ -112,7 +119,7 @@ class DiskFillBridge:
                  nu: float = 0.25, friction: float = 0.5, rolling_friction: float = 0.3,
                  restitution: float = 0.5, local_damping: float = 0.7, seed: int = 1,
                  mesh_size: float | None = None, inertia_scale: float | None = None,
-                 overfill: float = 0.25,
+                 overfill: float = 0.25, surfacing: float = 0.0, surfacing_material=None,
                  comm: MPI.Comm = MPI.COMM_WORLD):
         from masonry_fdem.assessment.specs import SPREADER
         from masonry_fdem.geometry import polygon_area
@@ -131,37 +138,61 @@ class DiskFillBridge:
             raise ValueError(f"local_damping must lie in [0, 1), got {local_damping}")
         self.case, self.comm = case, comm
         fill = case.fill
+        if not (math.isfinite(surfacing) and 0.0 <= surfacing < fill.cover):
+            raise ValueError(f"surfacing must be >= 0 m and thinner than the cover "
+                             f"{fill.cover:g} m, got {surfacing}")
+        if surfacing > 0 and surfacing_material is None:
+            raise ValueError("a surfacing needs its surfacing_material")
+        self.surfacing = float(surfacing)
         structure = case.layout()
-        self.fill_polygon = fill_layout(structure, cover=fill.cover,
+        below = fill.cover - self.surfacing  # the disks' cover over the crown
+        self.fill_polygon = fill_layout(structure, cover=below,
                                         wall_thickness=fill.wall_thickness).polygons[0]
         area = polygon_area(self.fill_polygon)
         r_min, r_max = radii_for_count(area, count, porosity)
         self.road = case.road_level()
-        # packed higher than the road (a loose packing settles by a sixth of its depth),
-        # settled, then trimmed to the road: a fill whose surface is the road's
-        depth = self.road - float(self.fill_polygon[:, 1].min())
+        self.fill_top = self.road - self.surfacing
+        # packed higher than its top (a loose packing settles by a sixth of its depth),
+        # settled, then trimmed to it: a fill whose surface is where the case has it
+        depth = self.fill_top - float(self.fill_polygon[:, 1].min())
         if not overfill >= 0:
             raise ValueError(f"overfill must be >= 0, got {overfill}")
         self.overfill = overfill * depth
-        x, r, walls = fill_disks(structure, cover=fill.cover + self.overfill, r_min=r_min,
+        x, r, walls = fill_disks(structure, cover=below + self.overfill, r_min=r_min,
                                  r_max=r_max, porosity=porosity, seed=seed,
                                  wall_thickness=fill.wall_thickness)
         xl, half = case.load_x(), 0.5 * case.loading.spreader_width
         name, t, _ = SPREADER
-        top = self.road + self.overfill  # the beam waits above the packing
+        top = self.road + self.overfill  # the beam (and surfacing) wait above the packing
         beam = np.array([[xl - half, top], [xl + half, top], [xl + half, top + t],
                          [xl, top + t], [xl - half, top + t]])
         layout = structure + walls + BlockLayout((beam,), (name,), (name,))
+        top_layer = [name]
+        if self.surfacing > 0:
+            x0 = float(self.fill_polygon[:, 0].min()) + 0.01
+            x1 = float(self.fill_polygon[:, 0].max()) - 0.01
+            if not (x0 < xl - half and xl + half < x1):
+                raise ValueError("the loading beam overhangs the surfacing's ends")
+            y0 = top - self.surfacing
+            slab = np.array([[x0, y0], [x1, y0], [x1, top], [xl + half, top],
+                             [xl - half, top], [x0, top]])
+            layout = layout + BlockLayout((slab,), ("surfacing",), ("surfacing",))
+            top_layer.append("surfacing")
         self.layout = layout
         h = case.arch.mesh_size if mesh_size is None else float(mesh_size)
         sizes = [0.5 * t if n == name else fill.wall_thickness if n.startswith("wall:")
-                 else h for n in layout.names]
+                 else 0.5 * self.surfacing if n == "surfacing" else h for n in layout.names]
         # the beam of the voussoirs' material, not the continuum case's steel: its
         # stiffness hardly matters to the load it spreads, and steel's would set the
         # block contact's penalty, and so the time step, eight times shorter
         mats = dict(case.material_table)
         mats[name] = mats[case.arch.voussoir_material]
-        model = Model(layout.mesh(sizes, comm), mats, width=case.arch.width, comm=comm)
+        hyp = {}
+        if self.surfacing > 0:
+            mats["surfacing"] = surfacing_material
+            hyp["surfacing"] = "plane_strain"
+        model = Model(layout.mesh(sizes, comm), mats, hypotheses=hyp, width=case.arch.width,
+                      comm=comm)
         model.fix_blocks("abutment:*", name="abutments")
         model.fix_blocks("wall:*", name="walls")
         model.add_gravity()
@@ -177,6 +208,8 @@ class DiskFillBridge:
             return m if m is not None and (m.bonded or m.kn is not None) else None
 
         table = {(v, v): bond(jm[(v, v)]), (v, a): bond(jm[(v, a)]), (a, a): None}
+        if self.surfacing > 0:
+            table[(name, "surfacing")] = None  # the beam on the road: block contact
         joints = Joints(model, table, where=[(w, bond(m)) for w, m in
                                               case.joint_rules(structure)],
                         contact=contact)
@@ -201,9 +234,13 @@ class DiskFillBridge:
         self.inertia_scale = max(1.0, auto) if inertia_scale is None else float(inertia_scale)
         model.scale_inertia(self.inertia_scale)
         self._held = [model.fix_blocks("voussoir:*", name="arch"),
-                      model.fix_blocks(name, name="beam held")]
+                      model.fix_blocks(top_layer, name="beam held")]
         self.beam_nodes = np.flatnonzero(np.isin(model.node_block,
                                                  model.select_blocks(name))).astype(np.int64)
+        self._top_nodes = np.flatnonzero(np.isin(
+            model.node_block, model.select_blocks(top_layer))).astype(np.int64)
+        self._top_range = ((xl - half, xl + half) if self.surfacing == 0
+                           else (float(slab[0, 0]), float(slab[1, 0])))
         self._n_beam = comm.allreduce(int(self.beam_nodes.size))
         self.solver = None
         self.settled = False
@@ -260,19 +297,20 @@ class DiskFillBridge:
         return out["why"], steps, moved
 
     def _lower_beam_onto_fill(self) -> None:
-        """Move the beam down onto the settled disks under it (a hundredth of the
-        smallest radius above the highest of them), so that it does not fall."""
+        """Move the beam (and the surfacing) down onto the settled disks under it (a
+        hundredth of the smallest radius above the highest of them), so that it does not
+        fall."""
         x, r = self.disks.x, self.disks.r
-        xl, half = self.case.load_x(), 0.5 * self.case.loading.spreader_width
-        dx = np.maximum(np.abs(x[:, 0] - xl) - half, 0.0)
+        a, b = self._top_range
+        dx = np.maximum(np.maximum(a - x[:, 0], x[:, 0] - b), 0.0)
         under = dx < r
         if not under.any():
             raise RuntimeError("no disk under the loading beam after the fill settled")
         top = float(np.max(x[under, 1] + np.sqrt(r[under] ** 2 - dx[under] ** 2)))
         self.surface = top
-        shift = top + 0.01 * float(r.min()) - self.road - self.overfill
+        shift = top + 0.01 * float(r.min()) - self.fill_top - self.overfill
         u = self.model.u.x.array
-        u[2 * self.beam_nodes + 1] += shift
+        u[2 * self._top_nodes + 1] += shift
         self.model.u.x.scatter_forward()
 
     def settle(self, *, tol: float = 1e-3, max_steps: int = 200_000,
@@ -283,7 +321,7 @@ class DiskFillBridge:
         why1, self.steps_held, _ = self._equilibrate(tol=tol, max_steps=max_steps,
                                                     every=every)
         if self.overfill > 0 and why1 == "equilibrium":
-            keep = self.disks.x[:, 1] <= self.road
+            keep = self.disks.x[:, 1] <= self.fill_top
             self.trimmed = int(self.disks.n - keep.sum())
             self.disks, self.coupling = self._make_disks(self.disks.x[keep],
                                                          self.disks.r[keep])
