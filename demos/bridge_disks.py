@@ -115,7 +115,7 @@ def main() -> None:
                     help="load position as a fraction of the span (default: the case's)")
     ap.add_argument("--count", type=int, default=5600, help="disks asked of the packer")
     ap.add_argument("--increment", type=float, default=10e3, help="load step [N]")
-    ap.add_argument("--max-steps", type=int, default=400_000,
+    ap.add_argument("--max-steps", type=int, default=600_000,
                     help="explicit steps allowed per load")
     ap.add_argument("--surfacing", type=float, default=0.0,
                     help="thickness [m] of a road layer over the disks, within the cover "

@@ -340,7 +340,7 @@ class DiskFillBridge:
         return self.settled
 
     def load(self, increment: float, *, max_load: float = math.inf, tol: float = 1e-3,
-             max_steps: int = 400_000, every: int = 500, runaway: float | None = None,
+             max_steps: int = 600_000, every: int = 500, runaway: float | None = None,
              callback=None) -> DiskFillRun:
         """Stage 3 of the module doc (collective): the beam's load [N] in steps of
         ``increment`` to collapse, ``max_load`` or no equilibrium. :meth:`settle` first.
