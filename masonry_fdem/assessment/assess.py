@@ -64,7 +64,7 @@ from mpi4py import MPI
 import numpy as np
 
 from masonry_fdem.assessment.case import ArchCase, CaseError, LoadControl, load_case
-from masonry_fdem.assessment.specs import SPREADER, classify_interface
+from masonry_fdem.assessment.specs import SPREADER, classify_interface, joint_or_contact
 from masonry_fdem.geometry.arches import arch_centre, arch_parameter
 from masonry_fdem.assessment.report import thrust_lines, write_run_folder
 from masonry_fdem.assessment.thrust import JointThrust
@@ -335,11 +335,8 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
         friction=case.analysis.friction, friction_table=friction_table,
         penalty_factor=case.analysis.penalty_factor))
 
-    def bond(jm):
-        return jm if jm is not None and (jm.bonded or jm.kn is not None) else None
-
-    table = {k: bond(v) for k, v in case.joint_materials().items()}
-    rules = [(where, bond(jm)) for where, jm in case.joint_rules(layout)]
+    table = {k: joint_or_contact(v) for k, v in case.joint_materials().items()}
+    rules = [(where, joint_or_contact(jm)) for where, jm in case.joint_rules(layout)]
     joints = Joints(model, table, where=rules, contact=contact)
     joints.set_softening(case.analysis.softening)
     specs = case.anchors()

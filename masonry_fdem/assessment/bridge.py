@@ -22,6 +22,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from masonry_fdem.assessment.specs import joint_or_contact
 from masonry_fdem.constants import G
 from masonry_fdem.geometry.bridge import Bridge, BridgeError
 from masonry_fdem.geometry.layout import BlockLayout
@@ -194,10 +195,7 @@ def bridge_model(
         friction=mortar.tan_phi, friction_table=friction,
         **({} if penalty_factor is None else {"penalty_factor": penalty_factor})))
 
-    def bond(jm):
-        return jm if jm is not None and (jm.bonded or jm.kn is not None) else None
-
-    joints = Joints(model, {k: bond(v) for k, v in table.items()}, contact=contact)
+    joints = Joints(model, {k: joint_or_contact(v) for k, v in table.items()}, contact=contact)
     return model, [contact, joints], axles
 
 

@@ -7,7 +7,8 @@ has them), with the fill region packed by rigid disks instead of the Mohr–Coul
 continuum (:func:`~masonry_fdem.interactions.disks.fill.fill_disks`; the disks' solid
 density is the fill's bulk density over 1 − porosity), two fixed end walls, and a guided
 loading beam on the road at the case's load position (``loading.spreader_width`` wide),
-bearing on the disks or, optionally, on a road layer (``surfacing``) over them. Disks touch the blocks through :class:`~masonry_fdem.interactions.DiskBlockContact`
+bearing on the disks or, optionally, on a road layer (``surfacing``) over them. Disks
+touch the blocks through :class:`~masonry_fdem.interactions.DiskBlockContact`
 with the fill's interface friction tan δ.
 
 Why explicit dynamics and not Newton: a disk packing has no tangent worth the name (its
@@ -121,7 +122,7 @@ class DiskFillBridge:
                  mesh_size: float | None = None, inertia_scale: float | None = None,
                  overfill: float = 0.25, surfacing: float = 0.0, surfacing_material=None,
                  comm: MPI.Comm = MPI.COMM_WORLD):
-        from masonry_fdem.assessment.specs import SPREADER
+        from masonry_fdem.assessment.specs import SPREADER, joint_or_contact
         from masonry_fdem.geometry import polygon_area
         from masonry_fdem.geometry.fill import fill_layout
         from masonry_fdem.geometry.layout import BlockLayout
@@ -204,13 +205,11 @@ class DiskFillBridge:
         jm = case.joint_materials()
         v, a = case.arch.voussoir_material, case.arch.abutment_material
 
-        def bond(m):
-            return m if m is not None and (m.bonded or m.kn is not None) else None
-
-        table = {(v, v): bond(jm[(v, v)]), (v, a): bond(jm[(v, a)]), (a, a): None}
+        table = {(v, v): joint_or_contact(jm[(v, v)]), (v, a): joint_or_contact(jm[(v, a)]),
+                 (a, a): None}
         if self.surfacing > 0:
             table[(name, "surfacing")] = None  # the beam on the road: block contact
-        joints = Joints(model, table, where=[(w, bond(m)) for w, m in
+        joints = Joints(model, table, where=[(w, joint_or_contact(m)) for w, m in
                                               case.joint_rules(structure)],
                         contact=contact)
         rho = case.materials()[fill.material].density

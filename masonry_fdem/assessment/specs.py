@@ -24,7 +24,8 @@ from masonry_fdem.materials.elastic import Material
 
 __all__ = ["TONNE_FORCE", "AnalysisSpec", "AnchorLayout", "AnchorSpec", "ArchCase", "ArchSpec",
            "CaseError", "Damage", "DamageKind", "LoadControl", "LoadingSpec", "Objective",
-           "SearchSpec", "S_TOL", "FillSpec", "SPREADER", "classify_interface", "top_of"]
+           "SearchSpec", "S_TOL", "FillSpec", "SPREADER", "classify_interface", "top_of",
+           "joint_or_contact"]
 
 #: One tonne-force [N].
 TONNE_FORCE = 1000.0 * G
@@ -641,6 +642,13 @@ def top_of(layout: BlockLayout, x: float) -> float:
     if not math.isfinite(best):
         raise CaseError(f"loading: no voussoir under x = {x:g} m")
     return best
+
+
+def joint_or_contact(jm: JointMaterial | None) -> JointMaterial | None:
+    """A joint material for :class:`~masonry_fdem.interactions.joints.joints.Joints`: kept
+    if it is bonded or has its own stiffness, else None (a dry joint, left to the block
+    contact)."""
+    return jm if jm is not None and (jm.bonded or jm.kn is not None) else None
 
 
 def classify_interface(na: str, nb: str, arch: ArchSpec) -> tuple[str, int, int] | None:
