@@ -219,7 +219,8 @@ def cmd_assess(args) -> int:
                 f"(ratio {res.ratio:.3f})" if res.collapsed
                 else f"(ratio >= {res.bound_ratio:.3f})")
         print(line)
-        print(f"hinges at the peak load: "
+        disks = case.fill is not None and case.fill.model == "disks"
+        print(f"hinges {'at the end of the run' if disks else 'at the peak load'}: "
               f"{', '.join(e.joint for e in res.hinges_at_collapse) or 'none'}")
         print(f"report: {res.report.resolve()}")
     return 0

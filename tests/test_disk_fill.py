@@ -17,9 +17,13 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from masonry_fdem.assessment.case import load_case
+from masonry_fdem.assessment.assess import assess
+from masonry_fdem.assessment.case import CaseError, load_case
 from masonry_fdem.assessment.disk_fill import DiskFillBridge
+from masonry_fdem.assessment.report import read_curve
 from masonry_fdem.constants import G
+from masonry_fdem.io.checkpoint import CheckpointError
+from masonry_fdem.solvers.status import Status
 
 from test_bridge import small
 
@@ -44,33 +48,75 @@ def _run(comm, increment=INCREMENT, **kw):
     return case, b, run, seen
 
 
+def disk_case(**disks) -> dict:
+    """The small bridge's case with ``[fill] model = "disks"`` and its ``[fill.disks]``."""
+    d = small(loading__increment=INCREMENT)
+    d["fill"].update(model="disks", disks={"count": 300, "max_steps": MAX_STEPS, **disks})
+    return d
+
+
 @pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget); "
                     "under mpirun the same run is compared across ranks instead")
-def test_disk_fill_carries_the_ring_to_a_mechanism():
-    """The disk-filled bridge: a mechanism, more than the bare ring's limit load, every
-    load carried an equilibrium (reactions = weight + load within 2 %), and the ring
-    itself moving at the collapse (a bridge mechanism, not the beam alone sinking)."""
+def test_disk_fill_carries_the_ring_to_a_mechanism(tmp_path):
+    """The case file's ``[fill] model = "disks"`` run by ``assess``: a mechanism, more
+    than the bare ring's limit load, every load carried an equilibrium (reactions =
+    weight + load within 2 %), the ring itself moving at the collapse (a bridge
+    mechanism, not the beam alone sinking), and the run folder of any assessment with
+    the disks' stress picture."""
     comm = MPI.COMM_WORLD
-    case, b, run, seen = _run(comm)
+    seen, held = {}, {}
+
+    def at(state):
+        # the vertical reactions (abutments, end walls) against the weight of the blocks
+        # and disks and the load, at every equilibrium
+        br, p = state["bridge"], state["load"]
+        react = sum(v[1] for v in br.solver.reactions().values())
+        dead = -br.comm.allreduce(float(br.model.f_dead[1::2].sum()))
+        seen[p] = react / (dead + br.disks.weight + p)
+        held["bridge"] = br
+
+    case = load_case(disk_case())
+    res = assess(case, out=tmp_path / "run", progress=False, comm=comm, callback=at)
+    b = held["bridge"]
     bare = load_case({k: v for k, v in small().items() if k != "fill"}).limit_analysis()
     vous = np.isin(b.model.node_block, b.model.select_blocks("voussoir:*"))
     u = b.model.u.x.array.reshape(-1, 2)[: b.model.n_nodes][vous]
     moved = comm.allreduce(float(np.abs(u).max(initial=0.0)), op=MPI.MAX)
-    t = run.collapse_load / (1000 * G) if run.collapse_load else math.nan
+    t = res.collapse_load / (1000 * G) if res.collapse_load else math.nan
     print(f"\ndisk fill ({b.disks.n} disks, {b.trimmed} trimmed above the road, inertia "
-          f"×{b.inertia_scale:.0f}): {run.line()} ({t:.2f} t); bare ring limit analysis "
-          f"{bare.load_factor / 1e3:.2f} kN; reactions / (weight + load) "
+          f"×{b.inertia_scale:.0f}): {res.status_line} ({t:.2f} t; {res.status.detail}); "
+          f"bare ring limit analysis {bare.load_factor / 1e3:.2f} kN, with fill "
+          f"{res.limit_load / 1e3:.2f} kN; reactions / (weight + load) "
           + ", ".join(f"{p / 1e3:.0f} kN {v:.4f}" for p, v in seen.items())
-          + f"; ring moved {moved * 1e3:.1f} mm; steps {run.steps}; {run.seconds:.1f} s")
-    assert run.status.status.value == "mechanism"
-    assert run.collapse_load == run.loads[-1] and run.collapse_load > 0
+          + f"; ring moved {moved * 1e3:.1f} mm; steps {res.iterations}; "
+          f"{res.elapsed:.1f} s")
+    assert res.status.status is Status.MECHANISM
+    assert res.collapse_load == res.loads[-1] == res.peak_load and res.collapse_load > 0
+    assert res.resolution == INCREMENT and list(res.loads) == [
+        k * INCREMENT for k in range(len(res.loads))]
     # the fill spreads the load and holds the haunches: more than the bare ring
-    assert run.collapse_load > 1.5 * bare.load_factor
+    assert res.collapse_load > 1.5 * bare.load_factor
+    assert sorted(seen) == list(res.loads[1:])
     for p, ratio in seen.items():
         # (the ratios bound the mean imbalance of a disk, not the sum over the fill)
         assert ratio == pytest.approx(1.0, abs=0.02), p
-    assert all(rd < 1e-3 and rb < 1e-3 for rd, rb in run.ratios)
     assert moved > 0.25 * case.arch.ring_thickness
+    # a ring mechanism: hinges open at the end of the run on both sides of the crown,
+    # turning about the intrados and about the extrados (found from the joints' openings)
+    hinges = [e for e in res.hinges_at_collapse if e.kind == "hinge"]
+    assert len(hinges) >= 4, hinges
+    assert {e.side for e in hinges} == {"intrados", "extrados"}
+    assert min(e.s for e in hinges) < 0.25 < 0.5 < max(e.s for e in hinges)
+    # the run folder, as for any case
+    names = {p.name for p in res.folder.iterdir()}
+    assert {"report.md", "curve.csv", "summary.json", "load_displacement.png",
+            "mechanism.png", "vertical_stress.png"} <= names
+    text = res.report.read_text(encoding="utf-8")
+    assert f"**Status: mechanism — collapse load {res.collapse_load / 1e3:.2f} kN.**" in text
+    assert "disks (300 asked of the packer" in text and "Cundall" in text
+    assert "![last load carried: the disks' vertical stress](vertical_stress.png)" in text
+    status, rows = read_curve(res.folder / "curve.csv")
+    assert status.startswith("mechanism") and np.allclose(rows[:, 0], res.loads)
 
 
 def test_disk_fill_same_on_any_number_of_ranks():
@@ -103,6 +149,44 @@ def test_bad_input():
     b = DiskFillBridge(case, count=150)
     with pytest.raises(RuntimeError, match="settle"):
         b.load(INCREMENT)
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda d: d["fill"].update(model="granular"), r"fill\.model"),
+    (lambda d: d["fill"].update(model="continuum"),
+     r'fill\.disks: given, but fill\.model is "continuum"'),
+    (lambda d: d["loading"].update(control="displacement", displacement_increment=1e-4),
+     r"loading\.control: a disk fill is loaded in load steps"),
+    (lambda d: d["fill"]["disks"].update(surfacing=0.05),
+     r"fill\.disks\.surfacing: a road layer needs its surfacing_material"),
+    (lambda d: d["fill"]["disks"].update(surfacing=0.05, surfacing_material="road"),
+     r"fill\.disks\.surfacing_material: no \[materials\.road\]"),
+    (lambda d: d["fill"]["disks"].update(surfacing=0.3, surfacing_material="brick"),
+     r"fill\.disks\.surfacing: 0\.3 m must be thinner than the cover"),
+    (lambda d: d["fill"]["disks"].update(porosity=0.7), r"fill\.disks\.porosity"),
+    (lambda d: d["fill"]["disks"].update(radius=0.01),
+     r"unknown key 'radius' in \[fill\.disks\]"),
+])
+def test_case_file_disk_fill_bad_input_names_the_key(change, message):
+    d = disk_case()
+    change(d)
+    with pytest.raises(CaseError, match=message):
+        load_case(d)
+
+
+def test_case_file_picks_the_fill_model():
+    """``[fill] model``: the continuum by default; "disks" with ``[fill.disks]`` (its
+    defaults for what is not given), which ``DiskFillBridge.from_case`` follows."""
+    assert load_case(small()).fill.model == "continuum"
+    case = load_case(disk_case(friction=0.4))
+    assert case.fill.model == "disks"
+    assert (case.fill.disks.count, case.fill.disks.max_steps) == (300, MAX_STEPS)
+    assert case.fill.disks.friction == 0.4 and case.fill.disks.porosity == 0.2
+    b = DiskFillBridge.from_case(case)
+    assert b.disks.materials["fill"].friction == 0.4 and b.disks.materials["fill"].E == 1e8
+    assert b.local_damping == 0.7 and b.surfacing == 0.0
+    with pytest.raises(CheckpointError, match="disk fill"):
+        assess(case, write=True, resume=True, progress=False)
 
 
 def test_scale_inertia_lengthens_the_step_and_keeps_the_weight():

@@ -292,6 +292,30 @@ def _settle(solver, joints, case: ArchCase) -> RunStatus:
     return st
 
 
+def case_limit_analysis(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
+    """The limit analysis of an assessment (collective; run on rank 0, broadcast), or None
+    when the case's ``analysis.limit_analysis`` is off. No bond in the LP: the joints slide
+    at ``analysis.friction``, a friction-only layer that the FDEM model has as a joint (the
+    sand between rings) at its own tan φ."""
+    if not case.analysis.limit_analysis:
+        return None
+    la = None
+    if comm.rank == 0:
+        dry = [(on, jm.tan_phi) for on, jm in case.joint_rules()
+               if jm is not None and not jm.bonded and jm.kn is not None]
+        try:
+            la = case.limit_analysis(friction=lambda _a, _b, mid: next(
+                (mu for on, mu in dry if on(mid)), case.analysis.friction))
+            if la.status == "infeasible":
+                log.warning("%s: limit analysis: %s", case.name, la.explanation)
+        except (RuntimeError, ArithmeticError, ValueError) as exc:
+            la = exc  # raised on every rank below, none left waiting
+    la = comm.bcast(la if comm.rank == 0 else None, root=0)
+    if isinstance(la, Exception):
+        raise la
+    return la
+
+
 def _with(interactions: list, anchors) -> list:
     """The solver's interactions: contact and joints, then the anchors if any."""
     return interactions if anchors is None else [*interactions, anchors]
@@ -583,6 +607,14 @@ def assess(
             error += f" (it holds the checkpoint of a stopped run: --resume {folder})"
         if error:
             raise CaseError(error, str(case.source) if case.source else None)
+    if case.fill is not None and case.fill.model == "disks":
+        if resume:
+            raise CheckpointError(f"{case.name}: runs with a disk fill are not "
+                                  "checkpointed; this one cannot be resumed")
+        from masonry_fdem.assessment.disk_fill import assess_disk_fill
+
+        return assess_disk_fill(case, folder=folder, write=write, progress=progress,
+                                comm=comm, callback=callback, t_start=t_start)
     ck = None
     if write and case.analysis.solver == "newton":
         ck = Checkpointer(folder, comm, kind="assess", every=checkpoint_every,
@@ -604,25 +636,7 @@ def assess(
 
     ld = case.loading
     an = case.analysis
-    la = None
-    if resumed is not None:
-        la = resumed["assess"]["la"]
-    elif an.limit_analysis:
-        if comm.rank == 0:
-            # no bond in the LP: joints slide at `friction`, a friction-only layer that the
-            # FDEM model has as a joint (the sand between rings) at its own tan_phi
-            dry = [(on, jm.tan_phi) for on, jm in case.joint_rules()
-                   if jm is not None and not jm.bonded and jm.kn is not None]
-            try:
-                la = case.limit_analysis(friction=lambda _a, _b, mid: next(
-                    (mu for on, mu in dry if on(mid)), an.friction))
-                if la.status == "infeasible":
-                    log.warning("%s: limit analysis: %s", case.name, la.explanation)
-            except (RuntimeError, ArithmeticError, ValueError) as exc:
-                la = exc  # raised on every rank below, none left waiting
-        la = comm.bcast(la if comm.rank == 0 else None, root=0)
-        if isinstance(la, Exception):
-            raise la
+    la = resumed["assess"]["la"] if resumed is not None else case_limit_analysis(case, comm)
     limit_load = float(la.load_factor) if la is not None else None
     if limit_load is not None and not math.isfinite(limit_load):
         limit_load = None

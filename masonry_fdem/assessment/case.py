@@ -47,7 +47,18 @@ Schema (``*``: required):
     arch's); ``wall_thickness`` of the two fixed end walls [m] (0.3). The fill spans the
     abutments' width; the load bears on it through a steel loading beam as wide as
     ``loading.spreader_width`` (> 0), guided vertically; the load-line displacement is the
-    beam's. The limit analysis stays that of the bare ring.
+    beam's. ``model``: "continuum" (default; the Mohr–Coulomb continuum above, solved by
+    the case's solver) or "disks": the fill region packed with rigid disks, loaded in steps
+    of ``loading.increment`` by explicit dynamics
+    (:func:`~masonry_fdem.assessment.disk_fill.assess_disk_fill`; load control only).
+``[fill.disks]``
+    With ``model = "disks"`` (:class:`~masonry_fdem.assessment.specs.DiskFillSpec`):
+    ``count`` disks asked of the packer (5600); ``porosity`` (0.2); the disks' ``E`` [Pa]
+    (1e8), ``nu`` (0.25), ``friction`` (0.5), ``rolling_friction`` (0.3), ``restitution``
+    (0.5); Cundall's ``local_damping`` (0.7); ``seed`` (1); ``tol`` of the unbalanced-force
+    ratios (1e-3); ``max_steps`` per load (600000); ``surfacing`` [m] a road layer of
+    ``surfacing_material`` (a ``[materials]`` table) within the cover (0); ``cell`` [m] of
+    the stress picture (0.2).
 ``[joints.mortar]``\\*
     The :class:`~masonry_fdem.interactions.joints.joints.JointMaterial` of the joints between voussoirs
     and at the springings: ``kn``, ``ks`` [Pa/m] (default from the blocks' E), ``ft`` [Pa],

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from mpi4py import MPI
 
@@ -51,7 +51,7 @@ import numpy as np
 from masonry_fdem.interactions.protocol import BLOCKS
 from masonry_fdem.solvers.status import RunStatus, Status
 
-__all__ = ["DiskFillBridge", "DiskFillRun"]
+__all__ = ["DiskFillBridge", "DiskFillRun", "assess_disk_fill", "draw_stress", "stress_grid"]
 
 
 @dataclass
@@ -246,6 +246,22 @@ class DiskFillBridge:
         self.trimmed = 0
         self.surface = math.nan
 
+    @classmethod
+    def from_case(cls, case, comm: MPI.Comm = MPI.COMM_WORLD) -> DiskFillBridge:
+        """The bridge as the case file's ``[fill] model = "disks"`` and ``[fill.disks]``
+        ask (:class:`~masonry_fdem.assessment.specs.DiskFillSpec`; its defaults without
+        them)."""
+        from masonry_fdem.assessment.specs import DiskFillSpec
+
+        if case.fill is None:
+            raise ValueError("a disk fill needs a case with [fill]")
+        d = case.fill.disks or DiskFillSpec()
+        road = case.materials()[d.surfacing_material] if d.surfacing > 0 else None
+        return cls(case, count=d.count, porosity=d.porosity, E=d.E, nu=d.nu,
+                   friction=d.friction, rolling_friction=d.rolling_friction,
+                   restitution=d.restitution, local_damping=d.local_damping, seed=d.seed,
+                   surfacing=d.surfacing, surfacing_material=road, comm=comm)
+
     # ------------------------------------------------------------------ state
     def beam_settlement(self) -> float:
         """The beam's mean downward displacement [m] (collective)."""
@@ -415,3 +431,179 @@ class DiskFillBridge:
             break
         run.seconds = time.perf_counter() - t0
         return run
+
+
+# ---------------------------------------------------------------------- output
+def stress_grid(b: DiskFillBridge, cell: float):
+    """``(xs, ys, σ_yy)``: the disks' vertical stress [Pa] averaged from their contact
+    forces (:meth:`Disks.cell_stress`, Love–Weber) over square cells ``cell`` [m] wide
+    covering the fill's bounding box up to the road (NaN where a cell holds fewer than
+    three disk centres); collective."""
+    if not cell > 0:
+        raise ValueError(f"cell must be > 0 m, got {cell}")
+    poly = b.fill_polygon
+    xs = np.arange(poly[:, 0].min(), poly[:, 0].max() + 1e-9, cell)
+    y0 = poly[:, 1].min()
+    ys = y0 + cell * np.arange(int(np.ceil((b.road - y0) / cell - 1e-9)) + 1)
+    sig = np.full((ys.size - 1, xs.size - 1), np.nan)
+    x = b.disks.x
+    for i in range(ys.size - 1):
+        for j in range(xs.size - 1):
+            lo, hi = (xs[j], ys[i]), (xs[j + 1], ys[i + 1])
+            s = b.disks.cell_stress(lo, hi, [b.coupling])
+            n = np.count_nonzero(np.all((x >= lo) & (x < hi), axis=1))
+            if n >= 3:
+                sig[i, j] = s[1, 1]
+    return xs, ys, sig
+
+
+def draw_stress(b: DiskFillBridge, grid, load: float, y0: float, disks, path) -> None:
+    """Draw :func:`stress_grid` ``grid`` (compression positive, kPa), the disks ``(x, r)``
+    and the beam's bottom ``y0`` [m] as they were at ``load`` [N], over the blocks'
+    outlines (undeformed), into the PNG ``path`` (call on one rank)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Circle, Polygon
+
+    xs, ys, sig = grid
+    fig, ax = plt.subplots(figsize=(11, 4.2))
+    m = ax.pcolormesh(xs, ys, np.ma.masked_invalid(-sig / 1e3), cmap="magma_r",
+                      shading="flat", vmin=0.0)
+    fig.colorbar(m, ax=ax, label="vertical stress in the fill, compression [kPa]")
+    ax.add_collection(PatchCollection(
+        [Circle(c, r) for c, r in zip(*disks, strict=True)],
+        facecolor="none", edgecolor="0.55", linewidths=0.2))
+    for name, poly in zip(b.layout.names, b.layout.polygons, strict=True):
+        if name == b.BEAM:  # drawn where it is now, below
+            continue
+        ax.add_patch(Polygon(poly, closed=True, facecolor="0.85", edgecolor="k", lw=0.5,
+                             zorder=0.5))
+    xl, half = b.case.load_x(), 0.5 * b.case.loading.spreader_width
+    ax.add_patch(Polygon([[xl - half, y0], [xl + half, y0], [xl + half, y0 + 0.05],
+                          [xl - half, y0 + 0.05]], closed=True, facecolor="C0"))
+    ax.annotate(f"{load / 1e3:.0f} kN", xy=(xl, y0 + 0.06), xytext=(xl, b.road + 0.6),
+                ha="center", arrowprops=dict(arrowstyle="-|>", color="C3", lw=2))
+    ax.set_aspect("equal")
+    ax.set_xlim(xs[0] - 0.4, xs[-1] + 0.4)
+    ax.set_ylim(min(p[:, 1].min() for p in b.layout.polygons), b.road + 0.8)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(f"{b.case.name}: disk fill, vertical stress at {load / 1e3:.0f} kN "
+                 f"(the last load carried; cells {xs[1] - xs[0]:.2f} m)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
+                     comm: MPI.Comm = MPI.COMM_WORLD, callback=None,
+                     t_start: float | None = None):
+    """:func:`~masonry_fdem.assessment.assess.assess` of a case whose ``[fill]`` has
+    ``model = "disks"`` (collective; called by it): the bridge of
+    :meth:`DiskFillBridge.from_case` settled, then loaded in steps of
+    ``loading.increment`` up to ``loading.max_load`` or collapse. Returns an
+    :class:`~masonry_fdem.assessment.assess.Assessment` (``control`` "load", ``iterations``
+    the explicit steps per load, the load-line displacement the beam's settlement under
+    the live load, no hinge sequence) and writes the run folder as for any case, with
+    ``vertical_stress.png`` the disks' σ_yy at the last load carried and the mechanism
+    drawn with the disks, to scale.
+
+    Raises:
+        RuntimeError: the fill found no equilibrium under self-weight.
+    """
+    from masonry_fdem.assessment.assess import Assessment, _JointMonitor, case_limit_analysis
+    from masonry_fdem.assessment.report import thrust_lines, write_run_folder
+    from masonry_fdem.io import ProgressBar
+
+    t_start = time.perf_counter() if t_start is None else t_start
+    ld = case.loading
+    spec = case.fill.disks
+    la = case_limit_analysis(case, comm)
+    limit_load = float(la.load_factor) if la is not None else None
+    if limit_load is not None and not math.isfinite(limit_load):
+        limit_load = None
+    b = DiskFillBridge.from_case(case, comm=comm)
+    bar = None
+    if progress is not False:
+        if progress not in (None, True, "bar", "lines"):
+            raise ValueError(f"progress={progress!r}: expected None, True, False, 'bar' or "
+                             "'lines'")
+        bar = ProgressBar(case.name, comm=comm, mode="lines" if progress == "lines" else "bar",
+                          force=progress is True)
+    if not b.settle(tol=spec.tol, max_steps=spec.max_steps):
+        rd, rb = b.ratios()
+        raise RuntimeError(f"{case.name}: the disk fill found no equilibrium under "
+                           f"self-weight within {spec.max_steps} steps (ratios: disks "
+                           f"{rd:.1e}, blocks {rb:.1e}; tol {spec.tol:g})")
+    # the radial joints' hinges, from their openings beyond the self-weight state and
+    # their mortar's state (as for any case)
+    monitor = _JointMonitor(case, b.model, b.blocks[1])
+    monitor.base = monitor.openings() + monitor.base
+    events, seen = [], set()
+
+    def joint_events(load: float, disp: float) -> list:
+        opened, op = monitor.classify(case.analysis.hinge_opening)
+        for k, kind, side in opened:
+            if (k, kind) not in seen:
+                seen.add((k, kind))
+                events.append(monitor.event(k, kind, side, len(events) + 1, load, disp,
+                                            op[k]))
+        return [monitor.event(k, kind, side, 0, load, disp, op[k]) for k, kind, side in opened]
+
+    last: dict = {}
+
+    def at(br: DiskFillBridge, load: float) -> None:
+        disp = br.beam_settlement() - br.dead_settlement
+        joint_events(load, disp)
+        if write:
+            last.update(grid=stress_grid(br, spec.cell), load=load, disp=disp,
+                        disks=(br.disks.x.copy(), br.disks.r.copy()),
+                        beam=br.road + br.overfill - br.beam_settlement())
+        if bar is not None:
+            factor = f"{load / limit_load:.3f}" if limit_load else "-"
+            bar.increment(f"{case.name}: load factor {factor}, load {load / 1e3:.3f} kN, "
+                          f"beam settlement {disp * 1e3:.4f} mm, converged",
+                          load=f"{load / 1e3:.2f} kN", u=f"{disp * 1e3:.3f} mm")
+        if callback is not None:
+            callback({"load": load, "displacement": disp, "iterations": 0,
+                      "model": br.model, "interactions": br.blocks, "anchors": None,
+                      "bridge": br})
+
+    run = b.load(ld.increment, max_load=ld.max_load or math.inf, tol=spec.tol,
+                 max_steps=spec.max_steps, callback=at)
+    if bar is not None:
+        bar.close()
+    st = run.status
+    # the joints open at the end of the run: after a mechanism, those of the mechanism,
+    # opened while the beam ran under the load it could not carry
+    tried = run.loads[-1] + (run.increment if st.status is Status.MECHANISM else 0.0)
+    at_end = joint_events(tried, b.beam_settlement() - b.dead_settlement)
+    status = replace(st, detail=f"explicit dynamics, disk fill ({b.disks.n} disks): "
+                                f"{st.detail}")
+    res = Assessment(
+        case=case.name, control="load", status=status, peak_load=float(run.loads[-1]),
+        resolution=float(run.increment), loads=np.array(run.loads),
+        displacements=np.array(run.displacements), iterations=list(run.steps),
+        events=events, hinges_at_collapse=at_end, limit_load=limit_load,
+        limit_status=None if la is None else str(la.status),
+        limit_explanation="" if la is None else la.explanation,
+        limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
+        limit_thrust=[] if la is None else thrust_lines(case, la),
+        cells=int(b.model.blocks.n_cells))
+    res.elapsed = time.perf_counter() - t_start
+    if write:
+        def extra(tmp):
+            if "grid" not in last:
+                return []
+            if comm.rank == 0:
+                draw_stress(b, last["grid"], last["load"], last["beam"], last["disks"],
+                            tmp / "vertical_stress.png")
+            return [("last load carried: the disks' vertical stress", "vertical_stress.png",
+                     last["load"], last["disp"])]
+
+        write_run_folder(case, res, folder, b.model, b.blocks, None, comm, disks=b.disks,
+                         extra=extra)
+    return res

@@ -39,6 +39,7 @@ from masonry_fdem.assessment.specs import (
     CaseError,
     Damage,
     DamageKind,
+    DiskFillSpec,
     FillSpec,
     LoadControl,
     LoadingSpec,
@@ -257,8 +258,28 @@ def _parse_fill(m: S.FillModel, mats: Mapping[str, Material], arch: ArchSpec | N
     kn = m.interface_stiffness if m.interface_stiffness is not None else 20.0 * fm.E / size
     passive = (m.passive_mobilisation if m.passive_mobilisation is not None
                else PASSIVE_MOBILISATION)
+    disks = None
+    if m.model == "disks":
+        d = m.disks if m.disks is not None else S.DiskFillModel()
+        if d.surfacing >= m.cover:
+            bad(f"fill.disks.surfacing: {d.surfacing:g} m must be thinner than the cover "
+                f"{m.cover:g} m")
+        if d.surfacing > 0 and d.surfacing_material is None:
+            bad("fill.disks.surfacing: a road layer needs its surfacing_material (the name of "
+                "a [materials] table)")
+        if d.surfacing_material is not None:
+            if d.surfacing_material not in materials:
+                bad(f"fill.disks.surfacing_material: no [materials.{d.surfacing_material}] in "
+                    "the case")
+            elif d.surfacing == 0:
+                bad("fill.disks.surfacing_material: given, but fill.disks.surfacing is 0 "
+                    "(no road layer)")
+        disks = DiskFillSpec(**{k: getattr(d, k) for k in S.DiskFillModel.model_fields})
+    elif m.disks is not None:
+        bad('fill.disks: given, but fill.model is "continuum" (set model = "disks" to pack '
+            "the fill with disks)")
     return FillSpec(m.cover, mat, mu, kn, size, m.wall_thickness, passive, m.crossed,
-                    m.incline_loads)
+                    m.incline_loads, m.model, disks)
 
 
 def _parse_loading(m: S.LoadingModel, span: float | None, ctx: _Ctx) -> LoadingSpec | None:
@@ -612,6 +633,11 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         if fill is not None and loading is not None and not loading.spreader_width > 0:
             ctx.problems.append("loading: a load on the fill needs a loading beam "
                                 "(spreader_width > 0): a point load would punch into the soil")
+        if (fill is not None and fill.model == "disks" and loading is not None
+                and loading.control is not LoadControl.LOAD):
+            ctx.problems.append('loading.control: a disk fill is loaded in load steps, each '
+                                'held to equilibrium (control = "load"), not under '
+                                "displacement control")
     an = ctx.table(S.AnalysisModel, table("analysis") or {}, "analysis")
     analysis = None
     if an is not None:

@@ -19,7 +19,8 @@ __all__ = ["read_curve", "status_text", "thrust_lines", "write_run_folder"]
 
 
 def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
-                     snapshots: dict | None = None, stress: tuple | None = None) -> None:
+                     snapshots: dict | None = None, stress: tuple | None = None,
+                     disks=None, extra=None) -> None:
     """Write the run folder of an assessment (collective): the mechanism picture, the
     curve, the hinge sequence and the report, into a hidden folder handed over when
     complete; ``res.folder`` and ``res.report`` are set. ``snapshots`` (``{name: (local
@@ -28,7 +29,11 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
     states are those of the end of the run, so they are not drawn there). ``stress``
     (``(local σ_yy per cell [Pa], local displacements, load [N], load-line displacement
     [m])``, taken at the peak load of a case with fill) is drawn as
-    ``vertical_stress.png``: the load's path through the fill into the arch."""
+    ``vertical_stress.png``: the load's path through the fill into the arch. ``disks``
+    (a disk fill's :class:`~masonry_fdem.interactions.disks.Disks`) are drawn in the
+    mechanism picture, which is then drawn undeformed-to-scale (displacements ×1: the
+    disks where they are); ``extra(tmp)`` (collective) draws more pictures into the
+    hidden folder and returns their ``(name, file, load [N], displacement [m])``."""
     from masonry_fdem.io import plot_blocks
 
     tmp = partial_folder(folder)
@@ -47,13 +52,13 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
         u = model.gather_nodal(model.u.x.array)
         umax = float(np.abs(u).max()) if u is not None and u.size else 0.0
         umax = comm.bcast(umax, root=0)
-        mag = 0.05 * span / umax if umax > 0 else 1.0
+        mag = 0.05 * span / umax if umax > 0 and disks is None else 1.0
         pts = case.load_points()
         last = float(res.loads[-1]) if len(res.loads) else 0.0
         at_peak = res.hinges_at_collapse
         plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
                     title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
-                    joints=inter[1], anchors=anchors, loads=pts,
+                    joints=inter[1], anchors=anchors, loads=pts, disks=disks,
                     load_label=f"P = {last / 1e3:.2f} kN",
                     hinges=[e.position for e in at_peak] or None,
                     hinge_labels=[_order(res, e) for e in at_peak],
@@ -105,6 +110,8 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                               disp))
             finally:
                 model.u.x.array[:] = now
+        if extra is not None:
+            drawn += extra(tmp)
         hand_over(lambda t: _write_rank0(case, res, t, mag, drawn, folder), tmp, folder, comm)
     except BaseException:
         if comm.rank == 0:
@@ -347,8 +354,12 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     lines = [f"# Assessment of `{case.name}`", "", f"**Status: {res.status_line}.**", ""]
     if res.status.detail:
         lines += [f"How the run ended: {res.status.detail}.", ""]
+    disk_fill = case.fill is not None and case.fill.model == "disks"
     if not res.collapsed:
-        if case.analysis.solver == "newton":
+        if disk_fill:
+            lines += ["The run gives no collapse load: to find one, load it further (more "
+                      "`fill.disks.max_steps` per load, a larger `max_load`).", ""]
+        elif case.analysis.solver == "newton":
             lines += ["The run gives no collapse load: to find one, trace it further (more "
                       "`newton_steps` or `newton_iterations`, a smaller "
                       "`displacement_increment`, a larger `max_displacement` or "
@@ -367,6 +378,7 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
         f"{'bonded mortar' if case.mortar.bonded else 'dry'}, tan φ {case.mortar.tan_phi:g}.",
         f"- Damage: {', '.join(d.kind.value for d in case.damage) or 'none'}; "
         f"anchors: {len(case.anchor_specs)}.",
+        *([_fill_text(case)] if case.fill is not None else []),
         "",
         "| quantity | value |",
         "|---|---|",
@@ -378,7 +390,8 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
         lines.append(f"| FDEM largest load carried (a lower bound, not a collapse load) | "
                      f"**{kn:.2f} kN** ({kn / 9.80665:.2f} t) |")
     if res.limit_load is not None:
-        lines.append(f"| limit analysis (rigid blocks, LP) | {res.limit_load / 1e3:.2f} kN |")
+        lines.append(f"| limit analysis (rigid blocks, LP{_lp_fill(case)}) | "
+                     f"{res.limit_load / 1e3:.2f} kN |")
         if res.collapsed:
             lines.append(f"| FDEM / limit analysis | {res.ratio:.3f} |")
         else:
@@ -415,7 +428,11 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
                          f"{e.position[0]:.3f}, {e.position[1]:.3f} | {e.load / 1e3:.2f} |")
     else:
         lines.append("No joint opened beyond the threshold.")
-    lines += ["", f"Open at the peak load: {len(res.hinges_at_collapse)} joint(s). "
+    if disk_fill and any(e.load > res.peak_load for e in res.events):
+        lines += ["", "(A load above the collapse load is the one under which the loading "
+                  "beam ran on, with no equilibrium: those joints opened in the mechanism.)"]
+    when = "at the end of the run (the mechanism)" if disk_fill else "at the peak load"
+    lines += ["", f"Open {when}: {len(res.hinges_at_collapse)} joint(s). "
               f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
               "![hinges](hinges.png)", "",
               f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
@@ -455,8 +472,38 @@ def anchor_peaks_table(peaks: list[dict]) -> list[str]:
     return lines
 
 
+def _lp_fill(case) -> str:
+    f = case.fill
+    if f is None:
+        return ""
+    return (f"; the fill as RING's: its weight, the load's 2:1 dispersion, passive "
+            f"resistance × {f.passive_mobilisation:g}"
+            + (", loads leaning on steep chords" if f.incline_loads else ""))
+
+
+def _fill_text(case) -> str:
+    f = case.fill
+    head = (f"- Fill: {f.cover:g} m over the crown's extrados, interface tan δ "
+            f"{f.interface_friction:.3g}; ")
+    if f.model != "disks":
+        return head + f"a Mohr–Coulomb continuum (`{f.material}`, plane strain)."
+    d = f.disks
+    return head + (f"disks ({d.count} asked of the packer; porosity {d.porosity:g}, E "
+                   f"{d.E:.3g} Pa, friction {d.friction:g}, rolling friction "
+                   f"{d.rolling_friction:g}; bulk density that of `{f.material}`)"
+                   + (f" under {d.surfacing:g} m of `{d.surfacing_material}`"
+                      if d.surfacing > 0 else "") + ".")
+
+
 def _solver_text(case) -> str:
     an = case.analysis
+    if case.fill is not None and case.fill.model == "disks":
+        d = case.fill.disks
+        return (f"explicit dynamics with Cundall's local damping ({d.local_damping:g}), the "
+                f"fill as disks; an equilibrium when the unbalanced-force ratios of the disks "
+                f"(rattlers left out) and of the blocks fall below {d.tol:g} within "
+                f"{d.max_steps} steps per load; a mechanism when the loading beam runs a "
+                "quarter of the ring thickness under a constant load")
     if an.solver == "newton":
         return (f"Newton (PETSc SNES, MUMPS), arc length on the load-line displacement; "
                 f"equilibrium to {an.newton_rtol:g} of the forces"

@@ -184,8 +184,30 @@ class RingJointModel(JointModel):
     type: Literal["bonded", "sand"] = "bonded"
 
 
+class DiskFillModel(_Table):
+    """``[fill.disks]`` (see :class:`~masonry_fdem.assessment.specs.DiskFillSpec`)."""
+
+    count: integer(ge=50) = 5600
+    porosity: num("", gt=0.0, lt=0.5) = 0.2
+    E: num("Pa", "E", gt=0.0) = 1e8
+    nu: num("", gt=-1.0, lt=0.5) = 0.25
+    friction: num("", "tan_phi", ge=0.0) = 0.5
+    rolling_friction: num("", ge=0.0) = 0.3
+    restitution: num("", gt=0.0, le=1.0) = 0.5
+    local_damping: num("", ge=0.0, lt=1.0) = 0.7
+    seed: integer(ge=0) = 1
+    tol: num("", gt=0.0, lt=1.0) = 1e-3
+    max_steps: integer(ge=1000) = 600_000
+    surfacing: num("m", ge=0.0) = 0.0
+    surfacing_material: str | None = None
+    cell: num("m", gt=0.0) = 0.2
+
+
 class FillModel(_Table):
     """``[fill]``."""
+
+    model: Literal["continuum", "disks"] = "continuum"
+    disks: DiskFillModel | None = None
 
     cover: num("m", "length", gt=0.0)
     material: str = "fill"

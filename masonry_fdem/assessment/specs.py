@@ -24,8 +24,8 @@ from masonry_fdem.materials.elastic import Material
 
 __all__ = ["TONNE_FORCE", "AnalysisSpec", "AnchorLayout", "AnchorSpec", "ArchCase", "ArchSpec",
            "CaseError", "Damage", "DamageKind", "LoadControl", "LoadingSpec", "Objective",
-           "SearchSpec", "S_TOL", "FillSpec", "SPREADER", "classify_interface", "top_of",
-           "joint_or_contact"]
+           "SearchSpec", "S_TOL", "DiskFillSpec", "FillSpec", "SPREADER", "classify_interface",
+           "top_of", "joint_or_contact"]
 
 #: One tonne-force [N].
 TONNE_FORCE = 1000.0 * G
@@ -115,6 +115,35 @@ PASSIVE_MOBILISATION = 0.33
 
 
 @dataclass(frozen=True)
+class DiskFillSpec:
+    """``[fill.disks]``: the fill as disks (``[fill] model = "disks"``), loaded to collapse
+    by explicit dynamics (:class:`~masonry_fdem.assessment.disk_fill.DiskFillBridge`).
+    ``count`` disks asked of the packer; ``porosity`` of the packing (the disks' solid
+    density is the fill material's density / (1 − porosity)); the disks' ``E`` [Pa],
+    ``nu``, ``friction``, ``rolling_friction``, ``restitution``; Cundall's
+    ``local_damping``; the packing's ``seed``; ``tol`` of the unbalanced-force ratios that
+    define an equilibrium; ``max_steps`` explicit steps per load; ``surfacing`` [m], a road
+    layer of ``surfacing_material`` over the disks, within the cover (0: none);
+    ``cell`` [m], the width of the cells over which the report averages the disks'
+    stress."""
+
+    count: int = 5600
+    porosity: float = 0.2
+    E: float = 1e8
+    nu: float = 0.25
+    friction: float = 0.5
+    rolling_friction: float = 0.3
+    restitution: float = 0.5
+    local_damping: float = 0.7
+    seed: int = 1
+    tol: float = 1e-3
+    max_steps: int = 600_000
+    surfacing: float = 0.0
+    surfacing_material: str | None = None
+    cell: float = 0.2
+
+
+@dataclass(frozen=True)
 class FillSpec:
     """``[fill]``: a continuum (Mohr–Coulomb) backfill over the arch, up to a road
     ``cover`` [m] above the crown's extrados, retained at its ends by two fixed walls on
@@ -141,6 +170,9 @@ class FillSpec:
     passive_mobilisation: float = PASSIVE_MOBILISATION
     crossed: bool = False
     incline_loads: bool = False
+    #: "continuum" (Mohr–Coulomb, solved with the case's solver) or "disks" (``disks``)
+    model: str = "continuum"
+    disks: DiskFillSpec | None = None
 
     def interface(self) -> JointMaterial:
         """The fill's interface as a friction-only joint material."""
