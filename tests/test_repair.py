@@ -58,6 +58,10 @@ def _shared_tmp(tmp_path_factory, name: str) -> Path:
     return Path(comm.bcast(str(tmp_path_factory.mktemp(name)) if comm.rank == 0 else None))
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget: about "
+                    "a minute); the anchors' parallel forces are compared in "
+                    "tests/test_anchors.py, the repair's collective run folder in "
+                    "test_cheapest_layout_reaching_a_target_stops_early")
 def test_anchoring_raises_the_ring_separated_arch_by_half(tmp_path_factory):
     """The unstrengthened arch finds no equilibrium one step after 12.4 kN (not
     converged: a lower bound); the anchored one carries ``max_load`` = 21 kN (load
