@@ -53,7 +53,8 @@ def main() -> None:
                     help="load position as a fraction of the span (default: the case's)")
     ap.add_argument("--count", type=int, default=None,
                     help="disks asked of the packer (default: the case's [fill.disks], 5600)")
-    ap.add_argument("--increment", type=float, default=10e3, help="load step [N]")
+    ap.add_argument("--increment", type=float, default=10e3,
+                    help="load step [N] (10 kN; the case's is one tonne-force)")
     ap.add_argument("--max-steps", type=int, default=None,
                     help="explicit steps allowed per load (default: the case's, 600000)")
     ap.add_argument("--surfacing", type=float, default=0.0,

@@ -51,6 +51,7 @@ def _run(comm, increment=INCREMENT, **kw):
 def disk_case(**disks) -> dict:
     """The small bridge's case with ``[fill] model = "disks"`` and its ``[fill.disks]``."""
     d = small(loading__increment=INCREMENT)
+    d["fill"].pop("mesh_size")  # (the continuum's)
     d["fill"].update(model="disks", disks={"count": 300, "max_steps": MAX_STEPS, **disks})
     return d
 
@@ -164,6 +165,12 @@ def test_bad_input():
     (lambda d: d["fill"]["disks"].update(surfacing=0.3, surfacing_material="brick"),
      r"fill\.disks\.surfacing: 0\.3 m must be thinner than the cover"),
     (lambda d: d["fill"]["disks"].update(porosity=0.7), r"fill\.disks\.porosity"),
+    (lambda d: d["loading"].update(self_weight=False), r"loading\.self_weight: a disk fill"),
+    (lambda d: d["fill"].update(crossed=True), r"fill\.crossed: an option of the continuum"),
+    (lambda d: d["fill"].update(mesh_size=0.1),
+     r"fill\.mesh_size: an option of the continuum"),
+    (lambda d: d.update(anchors=[dict(layout="radial", angles=[90.0], diameter=0.016)]),
+     r"anchors: not modelled with a disk fill"),
     (lambda d: d["fill"]["disks"].update(radius=0.01),
      r"unknown key 'radius' in \[fill\.disks\]"),
 ])
@@ -174,7 +181,7 @@ def test_case_file_disk_fill_bad_input_names_the_key(change, message):
         load_case(d)
 
 
-def test_case_file_picks_the_fill_model():
+def test_case_file_picks_the_fill_model(tmp_path):
     """``[fill] model``: the continuum by default; "disks" with ``[fill.disks]`` (its
     defaults for what is not given), which ``DiskFillBridge.from_case`` follows."""
     assert load_case(small()).fill.model == "continuum"
@@ -187,6 +194,11 @@ def test_case_file_picks_the_fill_model():
     assert b.local_damping == 0.7 and b.surfacing == 0.0
     with pytest.raises(CheckpointError, match="disk fill"):
         assess(case, write=True, resume=True, progress=False)
+    # a stress picture of one column is refused before the run, not after it
+    with pytest.raises(ValueError, match=r"fill\.disks\.cell 2 m is wider than half"):
+        assess(load_case(disk_case(cell=2.0)), write=True, progress=False,
+               out=tmp_path / "run")
+    assert not (tmp_path / "run" / "report.md").exists()
 
 
 def test_scale_inertia_lengthens_the_step_and_keeps_the_weight():

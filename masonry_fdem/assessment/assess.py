@@ -125,9 +125,11 @@ class Assessment:
             change between the peak and its neighbouring steps (displacement control).
         loads, displacements: the load–displacement curve at the load line (converged
             steps; displacement downward positive), self-weight state first.
-        iterations: DR iterations of each point of the curve.
+        iterations: DR or Newton iterations of each point of the curve (with a disk fill:
+            explicit steps).
         events: the hinge sequence.
-        hinges_at_collapse: the joints open at the peak load.
+        hinges_at_collapse: the joints open at the peak load (with a disk fill: at the end
+            of the run, the mechanism's after a mechanism).
         limit_load: the limit-analysis collapse load (None if not run), ``limit_status``
             its LP status, ``limit_explanation`` its outcome in plain words and
             ``limit_hinges`` its hinges (``(blocks, position)``).

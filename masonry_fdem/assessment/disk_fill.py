@@ -41,8 +41,10 @@ Units: SI (N, m, s, kg). The loads are over the case's barrel ``width``.
 from __future__ import annotations
 
 import math
+import shutil
 import time
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 from mpi4py import MPI
 
@@ -242,6 +244,7 @@ class DiskFillBridge:
                            else (float(slab[0, 0]), float(slab[1, 0])))
         self._n_beam = comm.allreduce(int(self.beam_nodes.size))
         self.solver = None
+        self.last_steps = 0  # explicit steps of the last load carried
         self.settled = False
         self.trimmed = 0
         self.surface = math.nan
@@ -409,6 +412,7 @@ class DiskFillBridge:
                 run.displacements.append(self.beam_settlement() - base)
                 run.steps.append(steps)
                 run.ratios.append(self.ratios())
+                self.last_steps = steps
                 if callback is not None:
                     callback(self, p)
                 continue
@@ -439,10 +443,13 @@ def stress_grid(b: DiskFillBridge, cell: float):
     forces (:meth:`Disks.cell_stress`, Love–Weber) over square cells ``cell`` [m] wide
     covering the fill's bounding box up to the road (NaN where a cell holds fewer than
     three disk centres); collective."""
-    if not cell > 0:
-        raise ValueError(f"cell must be > 0 m, got {cell}")
+    width = float(np.ptp(b.fill_polygon[:, 0]))
+    if not 0 < cell <= 0.5 * width:
+        raise ValueError(f"cell must lie in (0, {0.5 * width:g}] m (half the fill's width), "
+                         f"got {cell}")
     poly = b.fill_polygon
-    xs = np.arange(poly[:, 0].min(), poly[:, 0].max() + 1e-9, cell)
+    x0 = poly[:, 0].min()
+    xs = x0 + cell * np.arange(int(np.ceil((poly[:, 0].max() - x0) / cell - 1e-9)) + 1)
     y0 = poly[:, 1].min()
     ys = y0 + cell * np.arange(int(np.ceil((b.road - y0) / cell - 1e-9)) + 1)
     sig = np.full((ys.size - 1, xs.size - 1), np.nan)
@@ -507,25 +514,41 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
     ``loading.increment`` up to ``loading.max_load`` or collapse. Returns an
     :class:`~masonry_fdem.assessment.assess.Assessment` (``control`` "load", ``iterations``
     the explicit steps per load, the load-line displacement the beam's settlement under
-    the live load, no hinge sequence) and writes the run folder as for any case, with
+    the live load, the hinge sequence from the radial joints as for any case,
+    ``hinges_at_collapse`` the joints open at the end of the run — after a mechanism,
+    those of the mechanism) and writes the run folder as for any case, with
     ``vertical_stress.png`` the disks' σ_yy at the last load carried and the mechanism
-    drawn with the disks, to scale.
+    drawn with the disks, to scale. ``callback`` gets ``"iterations"`` the explicit steps
+    of that load and ``"bridge"`` the :class:`DiskFillBridge`. A stop requested by a
+    signal (:func:`~masonry_fdem.io.checkpoint.stop_on_signals`) ends the run at the next
+    load carried with :class:`~masonry_fdem.io.checkpoint.Interrupted` (no checkpoint).
 
     Raises:
         RuntimeError: the fill found no equilibrium under self-weight.
+        ValueError: the case has anchors (not modelled with a disk fill).
     """
     from masonry_fdem.assessment.assess import Assessment, _JointMonitor, case_limit_analysis
     from masonry_fdem.assessment.report import thrust_lines, write_run_folder
+    from masonry_fdem.assessment.specs import DiskFillSpec
     from masonry_fdem.io import ProgressBar
+    from masonry_fdem.io.checkpoint import Interrupted, rearm, stop_requested
 
     t_start = time.perf_counter() if t_start is None else t_start
     ld = case.loading
-    spec = case.fill.disks
+    spec = case.fill.disks or DiskFillSpec()
+    if case.anchor_specs:
+        raise ValueError(f"{case.name}: anchors are not modelled with a disk fill (the "
+                         "continuum fill has them)")
     la = case_limit_analysis(case, comm)
     limit_load = float(la.load_factor) if la is not None else None
     if limit_load is not None and not math.isfinite(limit_load):
         limit_load = None
     b = DiskFillBridge.from_case(case, comm=comm)
+    rearm()  # (the mesh generator resets the signal handlers)
+    half = 0.5 * float(np.ptp(b.fill_polygon[:, 0]))
+    if write and not spec.cell <= half:
+        raise ValueError(f"{case.name}: fill.disks.cell {spec.cell:g} m is wider than half "
+                         f"the fill ({half:g} m): the stress picture would have one column")
     bar = None
     if progress is not False:
         if progress not in (None, True, "bar", "lines"):
@@ -557,6 +580,7 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
 
     def at(br: DiskFillBridge, load: float) -> None:
         disp = br.beam_settlement() - br.dead_settlement
+        steps = int(br.last_steps)
         joint_events(load, disp)
         if write:
             last.update(grid=stress_grid(br, spec.cell), load=load, disp=disp,
@@ -568,18 +592,22 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
                           f"beam settlement {disp * 1e3:.4f} mm, converged",
                           load=f"{load / 1e3:.2f} kN", u=f"{disp * 1e3:.3f} mm")
         if callback is not None:
-            callback({"load": load, "displacement": disp, "iterations": 0,
+            callback({"load": load, "displacement": disp, "iterations": steps,
                       "model": br.model, "interactions": br.blocks, "anchors": None,
                       "bridge": br})
+        if comm.allreduce(stop_requested(), op=MPI.LOR):
+            raise Interrupted(folder, int(round(load / ld.increment)), (
+                f"interrupted: {case.name} stopped at {load / 1e3:.4g} kN carried; runs "
+                "with a disk fill write no checkpoint: run the case again to finish it"))
 
     run = b.load(ld.increment, max_load=ld.max_load or math.inf, tol=spec.tol,
                  max_steps=spec.max_steps, callback=at)
     if bar is not None:
         bar.close()
     st = run.status
-    # the joints open at the end of the run: after a mechanism, those of the mechanism,
-    # opened while the beam ran under the load it could not carry
-    tried = run.loads[-1] + (run.increment if st.status is Status.MECHANISM else 0.0)
+    # the joints open at the end of the run: after a mechanism (or a load not converged),
+    # those opened under the load that found no equilibrium
+    tried = run.loads[-1] + (0.0 if st.status is Status.LOAD_REACHED else run.increment)
     at_end = joint_events(tried, b.beam_settlement() - b.dead_settlement)
     status = replace(st, detail=f"explicit dynamics, disk fill ({b.disks.n} disks): "
                                 f"{st.detail}")
@@ -598,12 +626,31 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
         def extra(tmp):
             if "grid" not in last:
                 return []
+            error = None
             if comm.rank == 0:
-                draw_stress(b, last["grid"], last["load"], last["beam"], last["disks"],
-                            tmp / "vertical_stress.png")
+                try:
+                    draw_stress(b, last["grid"], last["load"], last["beam"], last["disks"],
+                                tmp / "vertical_stress.png")
+                except Exception as exc:  # reaches every rank: none left waiting
+                    error = f"drawing the disks' stress: {exc!r}"
+            error = comm.bcast(error, root=0)
+            if error:
+                raise RuntimeError(error)
             return [("last load carried: the disks' vertical stress", "vertical_stress.png",
                      last["load"], last["disp"])]
 
+        if comm.rank == 0:
+            # a continuum run's outputs that this one does not write, from an earlier run
+            # into the same folder
+            for old in [*Path(folder).glob("paraview*"), Path(folder) / "first_hinge.png",
+                        Path(folder) / "peak_load.png"]:
+                if old.is_dir():
+                    shutil.rmtree(old, ignore_errors=True)
+                elif old.exists():
+                    old.unlink()
+        comm.barrier()
+        label = (f"P = {tried / 1e3:.2f} kN, not carried" if tried > run.loads[-1]
+                 else None)
         write_run_folder(case, res, folder, b.model, b.blocks, None, comm, disks=b.disks,
-                         extra=extra)
+                         extra=extra, load_label=label)
     return res

@@ -633,11 +633,22 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
         if fill is not None and loading is not None and not loading.spreader_width > 0:
             ctx.problems.append("loading: a load on the fill needs a loading beam "
                                 "(spreader_width > 0): a point load would punch into the soil")
-        if (fill is not None and fill.model == "disks" and loading is not None
-                and loading.control is not LoadControl.LOAD):
-            ctx.problems.append('loading.control: a disk fill is loaded in load steps, each '
-                                'held to equilibrium (control = "load"), not under '
-                                "displacement control")
+        if fill is not None and fill.model == "disks":
+            bad = ctx.problems.append
+            if loading is not None and loading.control is not LoadControl.LOAD:
+                bad('loading.control: a disk fill is loaded in load steps, each held to '
+                    'equilibrium (control = "load"), not under displacement control')
+            if loading is not None and not loading.self_weight:
+                bad("loading.self_weight: a disk fill settles under its weight: it cannot "
+                    "be switched off")
+            if anchors:
+                bad("anchors: not modelled with a disk fill (the continuum fill has them)")
+            if search is not None:
+                bad("search: a layout search runs anchors, which a disk fill does not model")
+            for key in ("mesh_size", "interface_stiffness", "crossed"):
+                if key in fmod.given():
+                    bad(f"fill.{key}: an option of the continuum fill; a disk fill has none "
+                        "(remove it, or see [fill.disks])")
     an = ctx.table(S.AnalysisModel, table("analysis") or {}, "analysis")
     analysis = None
     if an is not None:

@@ -14,13 +14,14 @@ import numpy as np
 
 from masonry_fdem.io.plot import save_load_curve
 from masonry_fdem.io.rundir import hand_over, partial_folder
+from masonry_fdem.solvers.status import Status
 
 __all__ = ["read_curve", "status_text", "thrust_lines", "write_run_folder"]
 
 
 def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
                      snapshots: dict | None = None, stress: tuple | None = None,
-                     disks=None, extra=None) -> None:
+                     disks=None, extra=None, load_label: str | None = None) -> None:
     """Write the run folder of an assessment (collective): the mechanism picture, the
     curve, the hinge sequence and the report, into a hidden folder handed over when
     complete; ``res.folder`` and ``res.report`` are set. ``snapshots`` (``{name: (local
@@ -31,9 +32,10 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
     [m])``, taken at the peak load of a case with fill) is drawn as
     ``vertical_stress.png``: the load's path through the fill into the arch. ``disks``
     (a disk fill's :class:`~masonry_fdem.interactions.disks.Disks`) are drawn in the
-    mechanism picture, which is then drawn undeformed-to-scale (displacements ×1: the
-    disks where they are); ``extra(tmp)`` (collective) draws more pictures into the
-    hidden folder and returns their ``(name, file, load [N], displacement [m])``."""
+    mechanism picture, which is then drawn deformed at true scale (×1: the disks where
+    they are); ``extra(tmp)`` (collective) draws more pictures into the hidden folder and
+    returns their ``(name, file, load [N], displacement [m])``; ``load_label`` replaces
+    the mechanism picture's "P = <last load carried>"."""
     from masonry_fdem.io import plot_blocks
 
     tmp = partial_folder(folder)
@@ -59,7 +61,7 @@ def write_run_folder(case, res, folder: Path, model, inter, anchors, comm,
         plot_blocks(model, tmp / "mechanism.png", field="displacement", scale=mag,
                     title=f"{case.name}: deformed ×{mag:.0f} at the end of the run",
                     joints=inter[1], anchors=anchors, loads=pts, disks=disks,
-                    load_label=f"P = {last / 1e3:.2f} kN",
+                    load_label=load_label or f"P = {last / 1e3:.2f} kN",
                     hinges=[e.position for e in at_peak] or None,
                     hinge_labels=[_order(res, e) for e in at_peak],
                     hinge_sides=[_side(e) for e in at_peak])
@@ -289,7 +291,9 @@ def _hinges_figure(case, res, path: Path) -> None:
         ax.plot(*e.position, "o", ms=10, mfc="none", mec="C3", mew=2, zorder=5)
     if res.hinges_at_collapse:
         handles.append(Line2D([], [], ls="", marker="o", ms=10, mfc="none", mec="C3", mew=2,
-                              label="FDEM hinge at the peak load"))
+                              label="FDEM hinge at the end of the run"
+                              if case.fill is not None and case.fill.model == "disks"
+                              else "FDEM hinge at the peak load"))
     # the order of opening beside each joint, outside the extrados or inside the intrados
     # (radially from the middle of the springing line); neighbours share one label
     if res.events:
@@ -358,7 +362,7 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     if not res.collapsed:
         if disk_fill:
             lines += ["The run gives no collapse load: to find one, load it further (more "
-                      "`fill.disks.max_steps` per load, a larger `max_load`).", ""]
+                      "`fill.disks.max_steps` per load, a larger `loading.max_load`).", ""]
         elif case.analysis.solver == "newton":
             lines += ["The run gives no collapse load: to find one, trace it further (more "
                       "`newton_steps` or `newton_iterations`, a smaller "
@@ -431,7 +435,8 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     if disk_fill and any(e.load > res.peak_load for e in res.events):
         lines += ["", "(A load above the collapse load is the one under which the loading "
                   "beam ran on, with no equilibrium: those joints opened in the mechanism.)"]
-    when = "at the end of the run (the mechanism)" if disk_fill else "at the peak load"
+    when = ("at the peak load" if not disk_fill else "at the end of the run (the mechanism)"
+            if res.status.status is Status.MECHANISM else "at the end of the run")
     lines += ["", f"Open {when}: {len(res.hinges_at_collapse)} joint(s). "
               f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
               "![hinges](hinges.png)", "",
@@ -476,9 +481,14 @@ def _lp_fill(case) -> str:
     f = case.fill
     if f is None:
         return ""
-    return (f"; the fill as RING's: its weight, the load's 2:1 dispersion, passive "
-            f"resistance × {f.passive_mobilisation:g}"
+    m = case.materials()[f.material]
+    text = (f"; the fill as RING's, of `{f.material}` (c {m.c / 1e3:g} kPa, φ {m.phi:g}°)"
+            + (": its weight," if case.loading.self_weight else ":")
+            + f" the load's 2:1 dispersion, passive resistance × {f.passive_mobilisation:g}"
             + (", loads leaning on steep chords" if f.incline_loads else ""))
+    if f.model == "disks":
+        text += "; not the disks, nor a road layer"
+    return text
 
 
 def _fill_text(case) -> str:

@@ -122,7 +122,8 @@ class DiskFillSpec:
     density is the fill material's density / (1 − porosity)); the disks' ``E`` [Pa],
     ``nu``, ``friction``, ``rolling_friction``, ``restitution``; Cundall's
     ``local_damping``; the packing's ``seed``; ``tol`` of the unbalanced-force ratios that
-    define an equilibrium; ``max_steps`` explicit steps per load; ``surfacing`` [m], a road
+    define an equilibrium; ``max_steps`` explicit steps per load (and per stage of the
+    settling under self-weight, of which there are three); ``surfacing`` [m], a road
     layer of ``surfacing_material`` over the disks, within the cover (0: none);
     ``cell`` [m], the width of the cells over which the report averages the disks'
     stress."""
@@ -145,7 +146,8 @@ class DiskFillSpec:
 
 @dataclass(frozen=True)
 class FillSpec:
-    """``[fill]``: a continuum (Mohr–Coulomb) backfill over the arch, up to a road
+    """``[fill]``: a backfill over the arch — a Mohr–Coulomb continuum, or disks with
+    ``model = "disks"`` (``disks``: :class:`DiskFillSpec`) — up to a road
     ``cover`` [m] above the crown's extrados, retained at its ends by two fixed walls on
     the abutments' outer faces (:func:`~masonry_fdem.geometry.fill.fill_layout`); always
     in plane strain. It touches the extrados, the abutments, the walls and the loading
