@@ -8,8 +8,8 @@ instead of the Mohr–Coulomb continuum
 settled on the held arch and trimmed to the road; the arch released and settled again;
 then the beam's load in steps, each held by explicit dynamics with Cundall's local
 damping until the unbalanced-force ratios of the disks and of the blocks fall below 1e-3;
-a load under which the beam runs a quarter of the ring thickness is a mechanism and the
-collapse load is the last load carried). It is the case run by ``assess`` with ``[fill]
+a load under which the ring runs on (a voussoir moves a quarter of the ring thickness) is
+a mechanism and the collapse load is the last load carried). It is the case run by ``assess`` with ``[fill]
 model = "disks"`` (the options below replace the case's values); the run folder ``--out``
 holds what any assessment writes (``report.md``, ``curve.csv``: load, the beam's settlement
 under the live load, explicit steps per load; ``load_displacement.png``, ``summary.json``)

@@ -29,11 +29,14 @@ Stages (:meth:`DiskFillBridge.settle`, :meth:`DiskFillBridge.load`):
    only); the whole settles again under self-weight;
 3. the beam's load rises in equal steps of ``increment`` [N], each held until the
    ratios fall below ``tol``: that load is carried, an equilibrium. A load at which
-   instead the beam runs ``runaway`` [m] under the constant load (default: a quarter of
-   the ring thickness) has no equilibrium: the structure is a mechanism, status
+   instead the ring runs on — a voussoir moves ``runaway`` [m] under the constant load
+   (default: a quarter of the ring thickness) — has no equilibrium: the structure is a
+   mechanism, status
    *mechanism*, and its collapse load is the last load carried, within one increment
    (below). A load at which neither happens within ``max_steps`` is *not converged*:
-   the last load carried is a lower bound only.
+   the last load carried is a lower bound only. The beam sinking into the fill (a
+   bearing failure of a cohesionless packing under a narrow beam, which finds its
+   bearing again some tenths of a metre down) is not a mechanism of the bridge.
 
 Units: SI (N, m, s, kg). The loads are over the case's barrel ``width``.
 """
@@ -61,8 +64,9 @@ class DiskFillRun:
     """Result of :meth:`DiskFillBridge.load`: ``status``; ``loads`` [N] carried (each an
     equilibrium; the first is 0, self-weight only) against ``displacements`` [m] (the
     beam's settlement under the live load, positive down); ``steps`` and ``ratios``
-    (disks', blocks') per load; ``moved`` [m]: how far the beam ran at the last load
-    tried; ``seconds`` of wall time."""
+    (disks', blocks') per load; ``moved``, ``ring_moved`` [m]: how far the beam and the
+    ring (its largest voussoir displacement) ran at the last load tried; ``seconds`` of
+    wall time."""
 
     status: RunStatus
     increment: float
@@ -71,6 +75,7 @@ class DiskFillRun:
     steps: list[int] = field(default_factory=list)
     ratios: list[tuple[float, float]] = field(default_factory=list)
     moved: float = 0.0
+    ring_moved: float = 0.0
     seconds: float = 0.0
 
     @property
@@ -236,6 +241,9 @@ class DiskFillBridge:
         model.scale_inertia(self.inertia_scale)
         self._held = [model.fix_blocks("voussoir:*", name="arch"),
                       model.fix_blocks(top_layer, name="beam held")]
+        ring_nodes = np.flatnonzero(np.isin(model.node_block,
+                                            model.select_blocks("voussoir:*")))
+        self._ring_dofs = np.column_stack([2 * ring_nodes, 2 * ring_nodes + 1]).ravel()
         self.beam_nodes = np.flatnonzero(np.isin(model.node_block,
                                                  model.select_blocks(name))).astype(np.int64)
         self._top_nodes = np.flatnonzero(np.isin(
@@ -291,13 +299,22 @@ class DiskFillBridge:
         return ExplicitSolver(self.model, interactions=inter, load_factor=0.0,
                               local_damping=self.local_damping)
 
+    def ring_motion(self, ref: np.ndarray) -> float:
+        """The largest displacement [m] of a voussoir node since the state whose
+        displacements are ``ref`` (this rank's voussoir dofs; collective)."""
+        u = self.model.u.x.array[self._ring_dofs].reshape(-1, 2) - ref.reshape(-1, 2)
+        local = float(np.sqrt((u * u).sum(axis=1)).max(initial=0.0))
+        return self.comm.allreduce(local, op=MPI.MAX)
+
     def _equilibrate(self, *, tol: float, max_steps: int, every: int,
-                     runaway: float = math.inf) -> tuple[str, int, float]:
-        """Run until both ratios are below ``tol`` ("equilibrium"), the beam has moved
-        ``runaway`` [m] ("runaway") or ``max_steps`` ("steps"). Returns the outcome, the
-        steps taken and how far the beam moved [m]."""
+                     runaway: float = math.inf) -> tuple[str, int, float, float]:
+        """Run until both ratios are below ``tol`` ("equilibrium"), a voussoir has moved
+        ``runaway`` [m] ("runaway": the ring running on, not the beam sinking into the
+        fill) or ``max_steps`` ("steps"). Returns the outcome, the steps taken, and how
+        far the ring and the beam moved [m]."""
         watch = math.isfinite(runaway)
-        start = self.beam_settlement() if watch else 0.0
+        start = self.beam_settlement()
+        ref = self.model.u.x.array[self._ring_dofs].copy()
         out = {"why": "steps"}
 
         def check(s) -> bool:
@@ -305,14 +322,13 @@ class DiskFillBridge:
             if rd < tol and rb < tol:
                 out["why"] = "equilibrium"
                 return True
-            if watch and self.beam_settlement() - start > runaway:
+            if watch and self.ring_motion(ref) > runaway:
                 out["why"] = "runaway"
                 return True
             return False
 
         steps = self.solver.run(steps=max_steps, every=every, until=check)
-        moved = self.beam_settlement() - start if watch else 0.0
-        return out["why"], steps, moved
+        return out["why"], steps, self.ring_motion(ref), self.beam_settlement() - start
 
     def _lower_beam_onto_fill(self) -> None:
         """Move the beam (and the surfacing) down onto the settled disks under it (a
@@ -336,23 +352,23 @@ class DiskFillBridge:
         """Stages 1 and 2 of the module doc (collective). Returns whether both reached
         equilibrium (ratios below ``tol``)."""
         self.solver = self._solver(False)
-        why1, self.steps_held, _ = self._equilibrate(tol=tol, max_steps=max_steps,
-                                                    every=every)
+        why1, self.steps_held, _, _ = self._equilibrate(tol=tol, max_steps=max_steps,
+                                                       every=every)
         if self.overfill > 0 and why1 == "equilibrium":
             keep = self.disks.x[:, 1] <= self.fill_top
             self.trimmed = int(self.disks.n - keep.sum())
             self.disks, self.coupling = self._make_disks(self.disks.x[keep],
                                                          self.disks.r[keep])
             self.solver = self._solver(False)
-            why1, more, _ = self._equilibrate(tol=tol, max_steps=max_steps, every=every)
+            why1, more, _, _ = self._equilibrate(tol=tol, max_steps=max_steps, every=every)
             self.steps_held += more
         for p in self._held:
             self.model.prescriptions.remove(p)
         self._lower_beam_onto_fill()
         self.model.prescribe_velocity(self.BEAM, (0.0, None), name="beam guide")
         self.solver = self._solver(True)
-        why2, self.steps_free, _ = self._equilibrate(tol=tol, max_steps=max_steps,
-                                                    every=every)
+        why2, self.steps_free, _, _ = self._equilibrate(tol=tol, max_steps=max_steps,
+                                                       every=every)
         self.settled = why1 == why2 == "equilibrium"
         self.dead_settlement = self.beam_settlement()
         return self.settled
@@ -369,8 +385,11 @@ class DiskFillBridge:
             tol: unbalanced-force ratio of an equilibrium (disks and blocks).
             max_steps: explicit steps allowed per load.
             every: steps between ratio checks.
-            runaway: beam travel [m] under one constant load that proves no equilibrium
-                (default: a quarter of the ring thickness).
+            runaway: the ring's travel [m] (its largest voussoir displacement) under one
+                constant load that proves no equilibrium (default: a quarter of the ring
+                thickness). The ring's, not the beam's: a beam on a cohesionless fill
+                sinks into it by tenths of a metre before it finds its bearing, and the
+                load is then carried (a footing gains capacity with its depth).
             callback: ``callback(bridge, load)`` after each equilibrium (pictures, output).
 
         Raises:
@@ -404,9 +423,9 @@ class DiskFillBridge:
                 break
             self.solver.load_factor = p
             self.model.external_force(p, out=self.solver.f_ext)
-            why, steps, moved = self._equilibrate(tol=tol, max_steps=max_steps,
-                                                  every=every, runaway=runaway)
-            run.moved = moved
+            why, steps, ring, moved = self._equilibrate(tol=tol, max_steps=max_steps,
+                                                        every=every, runaway=runaway)
+            run.moved, run.ring_moved = moved, ring
             if why == "equilibrium":
                 run.loads.append(p)
                 run.displacements.append(self.beam_settlement() - base)
@@ -421,9 +440,10 @@ class DiskFillBridge:
             if why == "runaway":
                 run.status = RunStatus(
                     Status.MECHANISM, last, last,
-                    detail=(f"no equilibrium at {p / 1e3:.4g} kN: the beam ran "
-                            f"{moved * 1e3:.1f} mm under that constant load in {steps} "
-                            f"steps (ratios: disks {rd:.1e}, blocks {rb:.1e}); the "
+                    detail=(f"no equilibrium at {p / 1e3:.4g} kN: the ring ran "
+                            f"{ring * 1e3:.1f} mm (the beam {moved * 1e3:.1f} mm) under "
+                            f"that constant load in {steps} steps (ratios: disks "
+                            f"{rd:.1e}, blocks {rb:.1e}); the "
                             f"collapse load lies between {last / 1e3:.4g} and "
                             f"{p / 1e3:.4g} kN"))
             else:
@@ -431,7 +451,7 @@ class DiskFillBridge:
                     Status.NOT_CONVERGED, last, last, at=p,
                     detail=(f"explicit: ratios disks {rd:.1e}, blocks {rb:.1e} after "
                             f"{steps} steps at {p / 1e3:.4g} kN (tol {tol:g}); the beam "
-                            f"moved {moved * 1e3:.2f} mm"))
+                            f"moved {moved * 1e3:.2f} mm, the ring {ring * 1e3:.2f} mm"))
             break
         run.seconds = time.perf_counter() - t0
         return run

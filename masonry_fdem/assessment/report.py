@@ -12,6 +12,7 @@ from mpi4py import MPI
 
 import numpy as np
 
+from masonry_fdem.assessment.specs import DiskFillSpec
 from masonry_fdem.io.plot import save_load_curve
 from masonry_fdem.io.rundir import hand_over, partial_folder
 from masonry_fdem.solvers.status import Status
@@ -434,7 +435,7 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
         lines.append("No joint opened beyond the threshold.")
     if disk_fill and any(e.load > res.peak_load for e in res.events):
         lines += ["", "(A load above the collapse load is the one under which the loading "
-                  "beam ran on, with no equilibrium: those joints opened in the mechanism.)"]
+                  "ring ran on, with no equilibrium: those joints opened in the mechanism.)"]
     when = ("at the peak load" if not disk_fill else "at the end of the run (the mechanism)"
             if res.status.status is Status.MECHANISM else "at the end of the run")
     lines += ["", f"Open {when}: {len(res.hinges_at_collapse)} joint(s). "
@@ -497,7 +498,7 @@ def _fill_text(case) -> str:
             f"{f.interface_friction:.3g}; ")
     if f.model != "disks":
         return head + f"a Mohr–Coulomb continuum (`{f.material}`, plane strain)."
-    d = f.disks
+    d = f.disks or DiskFillSpec()
     return head + (f"disks ({d.count} asked of the packer; porosity {d.porosity:g}, E "
                    f"{d.E:.3g} Pa, friction {d.friction:g}, rolling friction "
                    f"{d.rolling_friction:g}; bulk density that of `{f.material}`)"
@@ -508,12 +509,14 @@ def _fill_text(case) -> str:
 def _solver_text(case) -> str:
     an = case.analysis
     if case.fill is not None and case.fill.model == "disks":
-        d = case.fill.disks
+        d = case.fill.disks or DiskFillSpec()
         return (f"explicit dynamics with Cundall's local damping ({d.local_damping:g}), the "
                 f"fill as disks; an equilibrium when the unbalanced-force ratios of the disks "
                 f"(rattlers left out) and of the blocks fall below {d.tol:g} within "
-                f"{d.max_steps} steps per load; a mechanism when the loading beam runs a "
-                "quarter of the ring thickness under a constant load")
+                f"{d.max_steps} steps per load; a mechanism when the ring runs on under a "
+                "constant load, a voussoir moving a quarter of the ring thickness (the "
+                "ring's motion, not the beam's: the beam may sink into the fill and find "
+                "its bearing)")
     if an.solver == "newton":
         return (f"Newton (PETSc SNES, MUMPS), arc length on the load-line displacement; "
                 f"equilibrium to {an.newton_rtol:g} of the forces"
