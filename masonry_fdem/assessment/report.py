@@ -434,8 +434,11 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     else:
         lines.append("No joint opened beyond the threshold.")
     if disk_fill and any(e.load > res.peak_load for e in res.events):
-        lines += ["", "(A load above the collapse load is the one under which the loading "
-                  "ring ran on, with no equilibrium: those joints opened in the mechanism.)"]
+        lines += ["", "(A load above the collapse load is the one under which the ring ran "
+                  "on, with no equilibrium: those joints opened in the mechanism.)"
+                  if res.status.status is Status.MECHANISM else
+                  "(A load above the largest load carried is the one that found no "
+                  "equilibrium within the step budget: those joints opened under it.)"]
     when = ("at the peak load" if not disk_fill else "at the end of the run (the mechanism)"
             if res.status.status is Status.MECHANISM else "at the end of the run")
     lines += ["", f"Open {when}: {len(res.hinges_at_collapse)} joint(s). "
