@@ -526,7 +526,7 @@ def draw_stress(b: DiskFillBridge, grid, load: float, y0: float, disks, path) ->
                  f"(the last load carried; cells {xs[1] - xs[0]:.2f} m; colours clipped at "
                  "the 98th percentile)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=130, bbox_inches="tight")
     plt.close(fig)
 
 
