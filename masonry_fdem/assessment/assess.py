@@ -318,6 +318,27 @@ def case_limit_analysis(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     return la
 
 
+def limit_load_of(la) -> float | None:
+    """The collapse load [N] of a limit analysis (None without one, or when it found none:
+    infinite or infeasible)."""
+    load = float(la.load_factor) if la is not None else None
+    return load if load is not None and math.isfinite(load) else None
+
+
+def progress_bar(name: str, progress, comm: MPI.Comm):
+    """The progress display :func:`assess` asks for with ``progress`` (see there), or None
+    (collective)."""
+    from masonry_fdem.io import ProgressBar
+
+    if progress is False:
+        return None
+    if progress not in (None, True, "bar", "lines"):
+        raise ValueError(f"progress={progress!r}: expected None, True, False, 'bar' or "
+                         "'lines'")
+    return ProgressBar(name, comm=comm, mode="lines" if progress == "lines" else "bar",
+                       force=progress is True)
+
+
 def _with(interactions: list, anchors) -> list:
     """The solver's interactions: contact and joints, then the anchors if any."""
     return interactions if anchors is None else [*interactions, anchors]
@@ -633,28 +654,19 @@ def assess(
         if comm.rank == 0:
             log.info("%s: resuming from %s (increment %d)", case.name,
                      manifest["generation"], manifest["step"])
-    from masonry_fdem.io import ProgressBar
     from masonry_fdem.solvers import DynamicRelaxation
 
     ld = case.loading
     an = case.analysis
     la = resumed["assess"]["la"] if resumed is not None else case_limit_analysis(case, comm)
-    limit_load = float(la.load_factor) if la is not None else None
-    if limit_load is not None and not math.isfinite(limit_load):
-        limit_load = None
+    limit_load = limit_load_of(la)
 
     model, inter, anchors = build_model(case, comm)
     rearm()  # (the mesh generator resets the signal handlers)
     monitor = _JointMonitor(case, model, next((i for i in inter if i.name == "joints"), None))
     rings = _RingMonitor(case, model)
     points = case.load_points()
-    bar = None
-    if progress is not False:
-        if progress not in (None, True, "bar", "lines"):
-            raise ValueError(f"progress={progress!r}: expected None, True, False, 'bar' or "
-                             "'lines'")
-        bar = ProgressBar(case.name, comm=comm, mode="lines" if progress == "lines" else "bar",
-                          force=progress is True)
+    bar = progress_bar(case.name, progress, comm)
 
     prestressed = anchors is not None and any(a.prestress > 0 for a in anchors.anchors)
     newton = an.solver == "newton"

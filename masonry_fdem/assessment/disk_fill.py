@@ -552,10 +552,10 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
         RuntimeError: the fill found no equilibrium under self-weight.
         ValueError: the case has anchors (not modelled with a disk fill).
     """
-    from masonry_fdem.assessment.assess import Assessment, _JointMonitor, case_limit_analysis
+    from masonry_fdem.assessment.assess import (Assessment, _JointMonitor, case_limit_analysis,
+                                                limit_load_of, progress_bar)
     from masonry_fdem.assessment.report import thrust_lines, write_run_folder
     from masonry_fdem.assessment.specs import DiskFillSpec
-    from masonry_fdem.io import ProgressBar
     from masonry_fdem.io.checkpoint import Interrupted, rearm, stop_requested
 
     t_start = time.perf_counter() if t_start is None else t_start
@@ -565,22 +565,14 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
         raise ValueError(f"{case.name}: anchors are not modelled with a disk fill (the "
                          "continuum fill has them)")
     la = case_limit_analysis(case, comm)
-    limit_load = float(la.load_factor) if la is not None else None
-    if limit_load is not None and not math.isfinite(limit_load):
-        limit_load = None
+    limit_load = limit_load_of(la)
     b = DiskFillBridge.from_case(case, comm=comm)
     rearm()  # (the mesh generator resets the signal handlers)
     half = 0.5 * float(np.ptp(b.fill_polygon[:, 0]))
     if write and not spec.cell <= half:
         raise ValueError(f"{case.name}: fill.disks.cell {spec.cell:g} m is wider than half "
                          f"the fill ({half:g} m): the stress picture would have one column")
-    bar = None
-    if progress is not False:
-        if progress not in (None, True, "bar", "lines"):
-            raise ValueError(f"progress={progress!r}: expected None, True, False, 'bar' or "
-                             "'lines'")
-        bar = ProgressBar(case.name, comm=comm, mode="lines" if progress == "lines" else "bar",
-                          force=progress is True)
+    bar = progress_bar(case.name, progress, comm)
     if not b.settle(tol=spec.tol, max_steps=spec.max_steps):
         rd, rb = b.ratios()
         raise RuntimeError(f"{case.name}: the disk fill found no equilibrium under "
