@@ -100,6 +100,9 @@ def test_parallel_collapse_load_is_that_of_one_process():
     assert diff < 1e-8
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's "
+                    "budget: 41 s under mpirun against 16 s);"
+                    " a check of the path follower's logic, not of the ranks")
 def test_increment_stalled_above_the_tolerance_is_accepted_within_the_relaxed_one():
     """With ``relaxed_rtol`` given, an arc-length increment whose Newton iterations stay
     above ``rtol`` is accepted at its best iterate if that is within ``relaxed_rtol``
