@@ -233,6 +233,17 @@ def _case(**changes) -> dict:
     (dict(bridge__span=6.0), "unknown key 'span' in [bridge]"),
     (dict(vehicle__loads=[1.0]), "one load per axle"),
     (dict(analysis__stop_drop=1.5), "analysis.stop_drop: must be < 1"),
+    (dict(bridge__fill_model="disks"), "vehicle.load: missing"),
+    (dict(bridge__fill_model="granular"), "bridge.fill_model"),
+    (dict(bridge__disks={"count": 3000}), 'bridge.disks: given, but bridge.fill_model is '
+                                          '"continuum"'),
+    (dict(bridge__fill_model="disks", vehicle__load=2e5, bridge__disks={"surfacing": 0.1}),
+     "bridge.disks.surfacing: a bridge's road layer is [bridge] surfacing"),
+    (dict(bridge__fill_model="disks", vehicle__load=2e5, bridge__surfacing=0.0),
+     'bridge.surfacing: a bridge with fill_model = "disks" needs a surfacing'),
+    (dict(bridge__fill_model="disks", vehicle__load=2e5, bridge__mesh__crossed=True),
+     "bridge.mesh.crossed: the fill is disks"),
+    (dict(vehicle__load=-5.0), "vehicle.load: must be > 0"),
 ])
 def test_bad_bridge_case_is_named(changes, expected):
     with pytest.raises(CaseError) as info:

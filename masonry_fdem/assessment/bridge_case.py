@@ -22,6 +22,10 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
     kn = 5e9                      # [Pa/m] default 20 E_fill / fill mesh size
     [bridge.mesh]                 # [m] element sizes per part
     crossed = false               # fill, surfacing, soil in crossed triangles (no locking)
+    [bridge.disks]                # with [bridge] fill_model = "disks" (default
+    count = 6000                  #   "continuum"): as an arch case's [fill.disks], without
+                                  #   its surfacing keys (the bridge's surfacing is used);
+                                  #   needs a surfacing and vehicle.load (DiskBridge)
     [materials.stone] ...         # density, E, nu (and c, phi, psi: Mohr–Coulomb)
     [joints.mortar] ...           # the masonry's joints
     [vehicle]
@@ -29,6 +33,7 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
     loads = [1.0, 1.0]            # relative axle weights
     patch = 0.3                   # [m]
     positions = [1.5, 3.0]        # [m] x of the reference point at each run
+    load = 1e5                    # [N] the vehicle's total for a traverse at a fixed load
     [analysis]
     increment = 1e-3              # [m] first arc-length increment of the axles' settlement
     max_displacement = 0.1        # [m]
@@ -62,7 +67,7 @@ from masonry_fdem.assessment.parse import (
     parse_materials,
 )
 from masonry_fdem.assessment.schema import validate
-from masonry_fdem.assessment.specs import CaseError
+from masonry_fdem.assessment.specs import CaseError, DiskFillSpec
 from masonry_fdem.checks import numerical_failures
 from masonry_fdem.geometry.bridge import Bridge, BridgeError, Span
 from masonry_fdem.interactions.joints import JointMaterial
@@ -88,6 +93,25 @@ class BridgeCase:
     mesh: dict[str, float]
     analysis: dict[str, float] = field(default_factory=dict)
     crossed: bool = False
+    fill_model: str = "continuum"
+    disks: DiskFillSpec | None = None
+    load: float | None = None
+
+    def disk_bridge(self, comm: MPI.Comm = MPI.COMM_WORLD):
+        """The bridge with its fill as disks (``[bridge] fill_model = "disks"``, its
+        ``[bridge.disks]``; :class:`~masonry_fdem.assessment.disk_bridge.DiskBridge`), not
+        yet settled (collective)."""
+        from masonry_fdem.assessment.disk_bridge import DiskBridge
+
+        if self.fill_model != "disks":
+            raise ValueError(f"{self.name}: bridge.fill_model is {self.fill_model!r}, not "
+                             '"disks"')
+        d = self.disks or DiskFillSpec()
+        return DiskBridge(self.bridge, self.materials, self.mortar, self.interface,
+                          count=d.count, porosity=d.porosity, E=d.E, nu=d.nu,
+                          friction=d.friction, rolling_friction=d.rolling_friction,
+                          restitution=d.restitution, local_damping=d.local_damping,
+                          seed=d.seed, mesh_size=self.mesh, comm=comm)
 
     @numerical_failures("the bridge run")
     def run(self, x: float, comm: MPI.Comm = MPI.COMM_WORLD):
@@ -202,10 +226,31 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
                                              f"vehicle.positions: at {x:g} m, axle {k}")
                     except BridgeError as e:
                         problems.append(str(e))
+    disks = None
+    if bm is not None and bm.fill_model == "disks":
+        d = bm.disks if bm.disks is not None else S.DiskFillModel()
+        if d.surfacing > 0 or d.surfacing_material is not None:
+            problems.append("bridge.disks.surfacing: a bridge's road layer is [bridge] "
+                            "surfacing (and [bridge.materials] surfacing), not the disks'")
+        if bm.surfacing <= 0:
+            problems.append('bridge.surfacing: a bridge with fill_model = "disks" needs a '
+                            "surfacing (> 0 m): the vehicle's tyres bear on it, not on "
+                            "single disks")
+        if bm.mesh.crossed:
+            problems.append('bridge.mesh.crossed: the fill is disks (fill_model = "disks"); '
+                            "crossed triangles are for a continuum fill")
+        if vm is not None and vm.load is None:
+            problems.append('vehicle.load: missing: with fill_model = "disks" the vehicle '
+                            "traverses the bridge at a fixed total load [N]")
+        disks = DiskFillSpec(**{k: getattr(d, k) for k in S.DiskFillModel.model_fields})
+    elif bm is not None and bm.disks is not None:
+        problems.append('bridge.disks: given, but bridge.fill_model is "continuum" (set '
+                        'fill_model = "disks" to pack the fill with disks)')
     am = ctx.table(S.BridgeAnalysisModel, table("analysis") or {}, "analysis")
     analysis = {k: v for k, v in (am.model_dump() if am else {}).items() if v is not None}
     if problems:
         raise CaseError(list(dict.fromkeys(problems)), label)  # each line once
     assert bridge is not None and mortar is not None and vehicle is not None
     return BridgeCase(name, bridge, mats, mortar, interface, vehicle, positions, mesh,
-                      analysis, bool(bm.mesh.crossed))
+                      analysis, bool(bm.mesh.crossed), bm.fill_model, disks,
+                      None if vm is None or vm.load is None else float(vm.load))

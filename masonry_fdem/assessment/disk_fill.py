@@ -299,6 +299,10 @@ class DiskFillBridge:
         return ExplicitSolver(self.model, interactions=inter, load_factor=0.0,
                               local_damping=self.local_damping)
 
+    def ring_state(self) -> np.ndarray:
+        """This rank's voussoir displacements now [m] (a ``ref`` for :meth:`ring_motion`)."""
+        return self.model.u.x.array[self._ring_dofs].copy()
+
     def ring_motion(self, ref: np.ndarray) -> float:
         """The largest displacement [m] of a voussoir node since the state whose
         displacements are ``ref`` (this rank's voussoir dofs; collective)."""
@@ -347,6 +351,10 @@ class DiskFillBridge:
         u[2 * self._top_nodes + 1] += shift
         self.model.u.x.scatter_forward()
 
+    def _guide(self) -> None:
+        """Once the blocks are released: the loading beam guided (vertical motion only)."""
+        self.model.prescribe_velocity(self.BEAM, (0.0, None), name="beam guide")
+
     def settle(self, *, tol: float = 1e-3, max_steps: int = 200_000,
                every: int = 500) -> bool:
         """Stages 1 and 2 of the module doc (collective). Returns whether both reached
@@ -365,7 +373,7 @@ class DiskFillBridge:
         for p in self._held:
             self.model.prescriptions.remove(p)
         self._lower_beam_onto_fill()
-        self.model.prescribe_velocity(self.BEAM, (0.0, None), name="beam guide")
+        self._guide()
         self.solver = self._solver(True)
         why2, self.steps_free, _, _ = self._equilibrate(tol=tol, max_steps=max_steps,
                                                        every=every)

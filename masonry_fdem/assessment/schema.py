@@ -609,6 +609,8 @@ class BridgeModel(_Table):
     materials: BridgePartsModel
     interface: BridgeInterfaceModel = BridgeInterfaceModel()
     mesh: BridgeMeshModel = BridgeMeshModel()
+    fill_model: Literal["continuum", "disks"] = "continuum"
+    disks: DiskFillModel | None = None
 
 
 class VehicleModel(_Table):
@@ -618,6 +620,7 @@ class VehicleModel(_Table):
     loads: numbers("", optional=True) = None
     patch: num("m", gt=0.0) = 0.3
     positions: numbers("m")
+    load: num("N", "force", optional=True, gt=0.0) = None
 
 
 class BridgeAnalysisModel(_Table):
