@@ -28,7 +28,10 @@ the road's settlement under each axle, the ratios), ``traverse.png`` (settlement
 each axle against the bogie's position), and for two positions (``--pictures``)
 ``vertical_stress_<x>.png``, σ_yy in the fill averaged from the disks' contact forces over
 0.25 m cells (Love–Weber): the load paths through the fill (the paper's Figure 6), and
-``blocks_stress_<x>.png``, σ_yy in the arches, the pier, the soil and the surfacing.
+``blocks_stress_<x>.png``, σ_yy in the arches, the pier, the soil and the surfacing;
+``paraview/``: the blocks (``model.pvd``, or ``displacement.bp``/``stress.bp``/``joints.bp``
+with the ADIOS2 reader) and the disks (``disks.pvd``), one frame per position (time: the
+bogie centre's x [m]; -1 under self-weight).
 
     mpirun -n 2 python demos/bridge_two_span_disks.py --out out_bridge_two_span_disks
     (make demo-bridge)
@@ -55,7 +58,9 @@ import numpy as np  # noqa: E402
 from masonry_fdem.assessment.bridge_case import load_bridge_case  # noqa: E402
 from masonry_fdem.assessment.disk_bridge import draw_bridge_stress  # noqa: E402
 from masonry_fdem.assessment.disk_fill import stress_grid  # noqa: E402
+from masonry_fdem.io import DiskOutput  # noqa: E402
 from masonry_fdem.io.plot import plot_blocks  # noqa: E402
+from masonry_fdem.io.vtx import VTXOutput  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -72,8 +77,8 @@ def main() -> None:
                     help="x [m] of the bogie's centre, in the order driven (default: every "
                          "metre from 0.75 m to the pier's centre, 6.75 m)")
     ap.add_argument("--pictures", type=float, nargs="*", default=[2.75, 6.75],
-                    help="positions [m] whose stress is pictured (default: the first "
-                         "span's crown and the pier)")
+                    help="positions [m] whose stress is pictured (default: the bogie "
+                         "astride the first span's crown, 2.75 m, and over the pier)")
     ap.add_argument("--cell", type=float, default=0.25,
                     help="width [m] of the stress-averaging cells")
     ap.add_argument("--max-steps", type=int, default=300_000,
@@ -108,8 +113,18 @@ def main() -> None:
         raise SystemExit("the fill did not settle under self-weight: no traverse")
     pictures = {min(case.positions, key=lambda p, x=x: abs(p - x)) for x in args.pictures}
     drawn = []
+    # ParaView: the blocks (displacement, stress, joint states) and the disks, one frame
+    # per position of the bogie (time = the bogie centre's x [m]), the first under
+    # self-weight (time = -1)
+    pv = out / "paraview"
+    blocks_out = VTXOutput(b.model, pv, joints=b.blocks[1])
+    disks_out = DiskOutput(b.disks, pv)
+    blocks_out.write(-1.0)
+    disks_out.write(-1.0)
 
     def at(br, x):
+        blocks_out.write(x)
+        disks_out.write(x)
         s = ", ".join(f"{v * 1e3:.2f}" for v in br.axle_settlements(ref))
         ring = br.ring_motion(ring0)
         say(f"  bogie at x = {x:g} m: equilibrium in {br.last_steps} steps; road settlement "
@@ -136,6 +151,7 @@ def main() -> None:
     ring0 = b.ring_state()
     run = b.traverse(case.vehicle, case.positions, case.load, tol=tol,
                      max_steps=args.max_steps, callback=at)
+    blocks_out.close()
     say(run.line(), flush=True)
     if comm.rank != 0:
         return
@@ -160,7 +176,8 @@ def main() -> None:
                      f"{g * 1e3:.2f} | {r[0]:.1e}, {r[1]:.1e} |")
     lines += ["", "Settlement: the surfacing's top under each tyre patch; the ring's: the "
               "largest displacement of a voussoir node; both from the state under "
-              "self-weight. Pictures: " + ", ".join(drawn)]
+              "self-weight. Pictures: " + ", ".join(drawn) + ". ParaView: paraview/model.pvd "
+              "(blocks) and paraview/disks.pvd, one frame per position (time: x [m])."]
     text = "\n".join(lines) + "\n"
     (out / "traverse.md").write_text(text, encoding="utf-8")
     print(text)

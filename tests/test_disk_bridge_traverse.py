@@ -25,6 +25,9 @@ def _reactions(b):
     return {k: v[1] for k, v in b.solver.reactions().items()}
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget: 45 s "
+                    "under mpirun); the parallel part of the traverse, the tyres' nodal "
+                    "forces, is checked on any number of ranks below")
 def test_disk_filled_bridge_carries_a_vehicle_driven_across_it():
     """Under self-weight and with the vehicle at each position, the supports carry the
     weight of the blocks and disks (and the vehicle) within 2 %; the vehicle over the
@@ -42,7 +45,7 @@ def test_disk_filled_bridge_carries_a_vehicle_driven_across_it():
         seen[x] = _reactions(br)
 
     veh = Vehicle((0.0, -0.6), (1.0, 1.0), 0.2)
-    run = b.traverse(veh, [1.3, 3.8], LOAD, ramp=2, callback=at)
+    run = b.traverse(veh, [1.3, 3.8], LOAD, ramp=1, callback=at)
     print(f"\ntwo spans, {b.disks.n} disks (inertia ×{b.inertia_scale:.0f}): {run.line()}; "
           f"steps {run.steps}; settlements {np.round(np.array(run.settlements) * 1e3, 2)} mm;"
           f" self-weight reactions / weight {sum(dead.values()) / weight:.4f}; " + "; ".join(
@@ -56,6 +59,32 @@ def test_disk_filled_bridge_carries_a_vehicle_driven_across_it():
     assert abs(added[1.3]["abutment:right"]) < 0.1 < added[1.3]["abutment:left"]
     assert abs(added[3.8]["abutment:left"]) < 0.1 < added[3.8]["abutment:right"]
     assert np.all(np.array(run.settlements) > 0)
+
+
+def test_tyre_pressures_sum_to_the_axle_loads_on_any_rank_count():
+    """The vehicle's consistent nodal forces on the surfacing's top (its nodes spread over
+    the ranks): each axle's sum to its share of the load, the whole to the load, none
+    outside the patches; the same on one rank as on several."""
+    veh = Vehicle((0.0, -0.6), (2.0, 1.0), 0.2)
+    out = {}
+    for comm in (MPI.COMM_WORLD, MPI.COMM_SELF):
+        b = DiskBridge(two_span(), MATS, MORTAR, ITF, count=220, mesh_size=SIZES, comm=comm)
+        b.put_vehicle(veh, 1.37, LOAD)
+        m = b.model
+        n = m.n_nodes
+        fy = LOAD * m.f_live[1:2 * n:2]
+        x = m.X[:n, 0]
+        # (a patch's end inside an element loads both its nodes: one element more,
+        # the surfacing's 0.05 m, on each side)
+        sums = [comm.allreduce(float(fy[np.abs(x - xa) <= 0.1 + 0.05 + 1e-9].sum()))
+                for xa in (1.37, 0.77)]
+        total = comm.allreduce(float(fy.sum()))
+        out[comm.size] = (sums, total)
+        assert sums == pytest.approx([-LOAD * 2 / 3, -LOAD / 3], rel=1e-12)
+        assert total == pytest.approx(-LOAD, rel=1e-12)
+        assert [p for _, p in b.axles] == pytest.approx([LOAD * 2 / 3, LOAD / 3])
+    if MPI.COMM_WORLD.size > 1:
+        assert out[MPI.COMM_WORLD.size][0] == pytest.approx(out[1][0], rel=1e-12)
 
 
 def test_disk_filled_bridge_bad_input():

@@ -29,12 +29,13 @@ from test_bridge import small
 
 INCREMENT = 10e3  # [N]
 MAX_STEPS = 400_000
+RUNAWAY = 0.015  # [m]
 
 
-def _run(comm, increment=INCREMENT, **kw):
+def _run(comm, increment=INCREMENT, tol=1e-3, **kw):
     case = load_case(small())
     b = DiskFillBridge(case, count=300, seed=1, comm=comm)
-    assert b.settle()
+    assert b.settle(tol=tol)
     seen = {}
 
     def at(br, p):
@@ -44,7 +45,7 @@ def _run(comm, increment=INCREMENT, **kw):
         dead = -br.comm.allreduce(float(br.model.f_dead[1::2].sum()))
         seen[p] = react / (dead + br.disks.weight + p)
 
-    run = b.load(increment, max_steps=MAX_STEPS, callback=at, **kw)
+    run = b.load(increment, max_steps=MAX_STEPS, tol=tol, callback=at, **kw)
     return case, b, run, seen
 
 
@@ -76,7 +77,9 @@ def test_disk_fill_carries_the_ring_to_a_mechanism(tmp_path):
         seen[p] = react / (dead + br.disks.weight + p)
         held["bridge"] = br
 
-    case = load_case(disk_case())
+    # the ring's runaway at 15 mm, a tenth of its thickness (the suite's budget: the
+    # default quarter took some 250000 steps at the load that found no equilibrium)
+    case = load_case(disk_case(runaway=RUNAWAY))
     res = assess(case, out=tmp_path / "run", progress=False, comm=comm, callback=at)
     b = held["bridge"]
     bare = load_case({k: v for k, v in small().items() if k != "fill"}).limit_analysis()
@@ -101,9 +104,9 @@ def test_disk_fill_carries_the_ring_to_a_mechanism(tmp_path):
     for p, ratio in seen.items():
         # (the ratios bound the mean imbalance of a disk, not the sum over the fill)
         assert ratio == pytest.approx(1.0, abs=0.02), p
-    # (the run stops the load once a voussoir has moved a quarter of the ring thickness
-    # under it; measured here from the unloaded geometry)
-    assert moved > 0.2 * case.arch.ring_thickness
+    # (the run stops the load once a voussoir has moved RUNAWAY under it; measured here
+    # from the unloaded geometry)
+    assert moved > 0.8 * RUNAWAY
     # a ring mechanism: hinges open at the end of the run on both sides of the crown,
     # turning about the intrados and about the extrados (found from the joints' openings)
     hinges = [e for e in res.hinges_at_collapse if e.kind == "hinge"]
@@ -128,10 +131,11 @@ def test_disk_fill_same_on_any_number_of_ranks():
     comm = MPI.COMM_WORLD
     if comm.size == 1:
         pytest.skip("compares ranks: run under mpirun -n 2")
-    # cheaper than the test above (the suite's budget): 15 kN steps, and the ring's
-    # runaway at 10 mm instead of a quarter of its 0.15 m (146500 steps at 30 kN, not
-    # some 250000: 124 s for both runs where the default took 213 s)
-    kw = dict(increment=15e3, runaway=0.01)
+    # cheaper than the test above (the suite's budget): 15 kN steps, the ring's runaway
+    # at 5 mm instead of a quarter of its 0.15 m, and equilibrium at ratios below 3e-3
+    # (66 s for both runs where the defaults took 213 s; the looser ratio carries 30 kN,
+    # which at 1e-3 found no equilibrium: the same on any number of ranks either way)
+    kw = dict(increment=15e3, runaway=0.005, tol=3e-3)
     _, _, world, _ = _run(comm, **kw)
     _, _, one, _ = _run(MPI.COMM_SELF, **kw)
     print(f"\ndisk fill, {comm.size} ranks: {world.line()}; 1 rank: {one.line()}")

@@ -165,6 +165,10 @@ def test_disk_resting_on_a_deformable_block_loads_it_with_its_weight():
     assert abs(ry / disks.weight - 1.0) < 1e-3
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's "
+                    "budget: 16 s under mpirun against 11 s); "
+                    "the ranks are compared in "
+                    "test_disks_on_deformable_blocks_same_on_any_number_of_ranks")
 def test_settled_column_base_carries_the_weight():
     from masonry_fdem.interactions import DiskBlockContact
     from masonry_fdem.interactions.disks.packing import pack_disks

@@ -100,12 +100,15 @@ def test_a_diverged_solve_does_not_spoil_the_next_one():
 
 def test_shear_wall_as_tested_passes_its_peak_near_the_test_and_on_any_rank_count():
     curves = {}
-    for name, comm in (("world", MPI.COMM_WORLD), ("self", MPI.COMM_SELF)):
+    # (on one process the world is one rank: the same run, made once)
+    runs = [("world", MPI.COMM_WORLD)] + ([("self", MPI.COMM_SELF)]
+                                          if MPI.COMM_WORLD.size > 1 else [])
+    for name, comm in runs:
         model, joints, solver, run = _wall(comm)
         curves[name] = (np.array(run.displacements), np.array(run.loads), run.status,
                         joints.counts())
     dw, fw, sw, cw = curves["world"]
-    ds, fs, ss, cs = curves["self"]
+    ds, fs, ss, cs = curves.get("self", curves["world"])
     rel = np.abs(fw - fs).max() / fs.max()
     print(f"\nshear wall (held beam): {ss.describe('kN', 1e3)}; at {1e3 * ds[np.argmax(fs)]:.2f}"
           f" mm; {MPI.COMM_WORLD.size} ranks vs 1: {rel:.1e}; joints {cs}")

@@ -626,7 +626,7 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
                 "with a disk fill write no checkpoint: run the case again to finish it"))
 
     run = b.load(ld.increment, max_load=ld.max_load or math.inf, tol=spec.tol,
-                 max_steps=spec.max_steps, callback=at)
+                 max_steps=spec.max_steps, runaway=spec.runaway, callback=at)
     if bar is not None:
         bar.close()
     st = run.status

@@ -198,6 +198,7 @@ class DiskFillModel(_Table):
     seed: integer(ge=0) = 1
     tol: num("", gt=0.0, lt=1.0) = 1e-3
     max_steps: integer(ge=1000) = 600_000
+    runaway: num("m", optional=True, gt=0.0) = None
     surfacing: num("m", ge=0.0) = 0.0
     surfacing_material: str | None = None
     cell: num("m", gt=0.0) = 0.2

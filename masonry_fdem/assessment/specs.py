@@ -123,7 +123,9 @@ class DiskFillSpec:
     ``nu``, ``friction``, ``rolling_friction``, ``restitution``; Cundall's
     ``local_damping``; the packing's ``seed``; ``tol`` of the unbalanced-force ratios that
     define an equilibrium; ``max_steps`` explicit steps per load (and per stage of the
-    settling under self-weight, of which there are three); ``surfacing`` [m], a road
+    settling under self-weight, of which there are three); ``runaway`` [m], the travel of
+    a voussoir under one constant load that proves it has no equilibrium (default: a
+    quarter of the ring thickness); ``surfacing`` [m], a road
     layer of ``surfacing_material`` over the disks, within the cover (0: none);
     ``cell`` [m], the width of the cells over which the report averages the disks'
     stress."""
@@ -139,6 +141,7 @@ class DiskFillSpec:
     seed: int = 1
     tol: float = 1e-3
     max_steps: int = 600_000
+    runaway: float | None = None
     surfacing: float = 0.0
     surfacing_material: str | None = None
     cell: float = 0.2
