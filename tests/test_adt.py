@@ -4,6 +4,8 @@ References: the O(N²) numba brute force (``brute_force_pairs``), itself checked
 dense numpy broadcast; all comparisons are exact (integer pair arrays).
 """
 
+from mpi4py import MPI
+
 import numpy as np
 import pytest
 
@@ -64,6 +66,12 @@ def test_self_pairs_equal_brute_force(n, grouped):
         assert all((k, k + 10) in found for k in range(5))  # duplicates
 
 
+# the ADT is a serial algorithm: under mpirun every rank would repeat the same 1e5-box
+# search and its brute-force reference (some 18 s of the suite's budget)
+SERIAL = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process: a serial "
+                            "algorithm, each rank would repeat it (the suite's budget)")
+
+
 @pytest.fixture(scope="module")
 def boxes_1e5():
     """1e5 boxes, sizes varying 100x, with their brute-force pairs (~7 s)."""
@@ -71,12 +79,14 @@ def boxes_1e5():
     return boxes, brute_force_pairs(boxes)
 
 
+@SERIAL
 def test_self_pairs_1e5_boxes(boxes_1e5):
     boxes, ref = boxes_1e5
     assert len(ref) > 100_000
     assert np.array_equal(self_pairs(boxes), ref)
 
 
+@SERIAL
 def test_self_pairs_1e5_boxes_grouped(boxes_1e5):
     """Same-group pairs left out: the brute-force set filtered by group."""
     boxes, ref = boxes_1e5
