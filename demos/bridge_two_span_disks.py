@@ -194,6 +194,8 @@ def main() -> None:
             ax.plot(run.positions, s[:, k], "o-", label=f"axle {k} (centre {o:+g} m)")
     for a, c in br.springings():
         ax.axvspan(a, c, color="0.9", zorder=0)
+    if run.positions:
+        ax.set_xlim(min(run.positions) - 1.0, max(run.positions) + 1.0)
     ax.set_xlabel("bogie centre x [m] (spans shaded)")
     ax.set_ylabel("road settlement under the axle [mm]")
     ax.set_title(f"Disk-filled two-span bridge: {case.load / 1e3:.0f} kN bogie traversing",
