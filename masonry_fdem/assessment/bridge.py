@@ -148,14 +148,7 @@ def bridge_model(
     hyp = {name: "plane_strain" for name in continua if name in lay.materials}
     model = Model(mesh, mats, hypotheses=hyp, width=bridge.width, comm=comm)
     model.fix_blocks("wall:*", name="walls")
-    if bridge.soil_depth > 0:
-        lo, hi = bridge.soil_extent
-        yd = bridge.foundation_level - bridge.soil_depth
-        tol = 1e-6 * (hi - lo)
-        model.fix(lambda X: np.isclose(X[1], yd, atol=tol), name="soil base")
-        model.fix(lambda X: (np.isclose(X[0], lo, atol=tol) | np.isclose(X[0], hi, atol=tol))
-                  & (X[1] < bridge.foundation_level - tol), components=(0,),
-                  name="soil sides")
+    fix_soil(model, bridge)
     rigid = [n for n in bridge.foundations() if not bridge.on_soil(n)]
     if rigid:
         model.fix_blocks(rigid, name="foundations")
@@ -197,6 +190,19 @@ def bridge_model(
 
     joints = Joints(model, {k: joint_or_contact(v) for k, v in table.items()}, contact=contact)
     return model, [contact, joints], axles
+
+
+def fix_soil(model, bridge: Bridge) -> None:
+    """The soil (if any) fixed at its base and on rollers at its sides ("soil base",
+    "soil sides")."""
+    if bridge.soil_depth <= 0:
+        return
+    lo, hi = bridge.soil_extent
+    yd = bridge.foundation_level - bridge.soil_depth
+    tol = 1e-6 * (hi - lo)
+    model.fix(lambda X: np.isclose(X[1], yd, atol=tol), name="soil base")
+    model.fix(lambda X: (np.isclose(X[0], lo, atol=tol) | np.isclose(X[0], hi, atol=tol))
+              & (X[1] < bridge.foundation_level - tol), components=(0,), name="soil sides")
 
 
 def adhesive_interface(interface: JointMaterial, weaker: Material) -> JointMaterial:

@@ -47,7 +47,6 @@ import numpy as np
 
 from masonry_fdem.assessment.disk_fill import DiskFillBridge
 from masonry_fdem.geometry.bridge import Bridge, BridgeError
-from masonry_fdem.interactions.protocol import BLOCKS
 from masonry_fdem.solvers.status import RunStatus, Status
 
 __all__ = ["DiskBridge", "DiskTraverse", "draw_bridge_stress"]
@@ -109,13 +108,12 @@ class DiskBridge(DiskFillBridge):
                  mesh_size: float | Mapping[str, float] = 0.2,
                  inertia_scale: float | None = None, overfill: float = 0.25,
                  comm: MPI.Comm = MPI.COMM_WORLD):
-        from masonry_fdem.assessment.bridge import adhesive_interface
+        from masonry_fdem.assessment.bridge import adhesive_interface, fix_soil
         from masonry_fdem.assessment.specs import joint_or_contact
         from masonry_fdem.geometry import polygon_area
         from masonry_fdem.geometry.layout import BlockLayout
-        from masonry_fdem.interactions import (BlockContact, ContactSettings,
-                                               DiskBlockContact, Joints)
-        from masonry_fdem.interactions.disks import DiskMaterial, Disks
+        from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
+        from masonry_fdem.interactions.disks import DiskMaterial
         from masonry_fdem.interactions.disks.fill import pack_polygon, radii_for_count
         from masonry_fdem.model import Model
 
@@ -184,13 +182,7 @@ class DiskBridge(DiskFillBridge):
         model = Model(layout.mesh(sizes, comm), mats, hypotheses=hyp, width=bridge.width,
                       comm=comm)
         model.fix_blocks("wall:*", name="walls")
-        if bridge.soil_depth > 0:
-            lo, hi = bridge.soil_extent
-            yd = yb - bridge.soil_depth
-            tol = 1e-6 * (hi - lo)
-            model.fix(lambda X: np.isclose(X[1], yd, atol=tol), name="soil base")
-            model.fix(lambda X: (np.isclose(X[0], lo, atol=tol) | np.isclose(X[0], hi, atol=tol))
-                      & (X[1] < yb - tol), components=(0,), name="soil sides")
+        fix_soil(model, bridge)
         for n in bridge.foundations():  # one prescription each: each one's reaction
             if not bridge.on_soil(n):
                 model.fix_blocks(n, name=n)
@@ -218,28 +210,15 @@ class DiskBridge(DiskFillBridge):
         mat = DiskMaterial(density=rho / (1.0 - porosity), E=E, nu=nu, friction=friction,
                            restitution=restitution, rolling_friction=rolling_friction)
 
-        def make(x, r):
-            disks = Disks(x, r, {"fill": mat}, "fill", width=bridge.width, comm=comm)
-            disks.add_gravity()
-            return disks, DiskBlockContact(disks, model, friction=interface.tan_phi)
-
-        self._make_disks = make
-        self.model, self.blocks = model, [contact, joints]
-        self.disks, self.coupling = make(x, r)
-        self.local_damping = float(local_damping)
-        st = self._solver(True).stability
-        auto = (st["disks"].dt / st[BLOCKS].dt) ** 2
-        self.inertia_scale = max(1.0, auto) if inertia_scale is None else float(inertia_scale)
-        model.scale_inertia(self.inertia_scale)
         # held while the fill settles: every block that is not fixed already
         held = {"voussoir:*", self.BEAM} | {n for n in bridge.foundations()
                                              if bridge.on_soil(n)}
         held |= {"pier:*"} if bridge.piers else set()
         held |= {"soil"} if bridge.soil_depth > 0 else set()
-        self._held = [model.fix_blocks(sorted(held), name="held while the fill settles")]
-        ring_nodes = np.flatnonzero(np.isin(model.node_block,
-                                            model.select_blocks("voussoir:*")))
-        self._ring_dofs = np.column_stack([2 * ring_nodes, 2 * ring_nodes + 1]).ravel()
+        self._attach(model, [contact, joints], x, r, mat, width=bridge.width,
+                     friction=interface.tan_phi, local_damping=local_damping,
+                     inertia_scale=inertia_scale,
+                     held=[(sorted(held), "held while the fill settles")])
         # the surfacing plays the single span's loading beam (lowered onto the disks; its
         # mean settlement is the beam's)
         slab = np.flatnonzero(np.isin(model.node_block,
@@ -252,11 +231,6 @@ class DiskBridge(DiskFillBridge):
         on_top = np.isclose(X[self.beam_nodes, 1], top, atol=1e-9 * max(1.0, abs(top)))
         self._road_nodes = self.beam_nodes[on_top]
         self.ring_thickness = min(sp.ring_thickness * sp.rings for sp in bridge.spans)
-        self.solver = None
-        self.last_steps = 0
-        self.settled = False
-        self.trimmed = 0
-        self.surface = math.nan
         self.axles: list[tuple[float, float]] = []  # (x, load [N]) now on the road
         self._patch = 0.0
 

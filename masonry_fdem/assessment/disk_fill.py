@@ -133,9 +133,8 @@ class DiskFillBridge:
         from masonry_fdem.geometry import polygon_area
         from masonry_fdem.geometry.fill import fill_layout
         from masonry_fdem.geometry.layout import BlockLayout
-        from masonry_fdem.interactions import (BlockContact, ContactSettings,
-                                               DiskBlockContact, Joints)
-        from masonry_fdem.interactions.disks import DiskMaterial, Disks
+        from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
+        from masonry_fdem.interactions.disks import DiskMaterial
         from masonry_fdem.interactions.disks.fill import fill_disks, radii_for_count
         from masonry_fdem.model import Model
 
@@ -223,13 +222,36 @@ class DiskFillBridge:
         mat = DiskMaterial(density=rho / (1.0 - porosity), E=E, nu=nu, friction=friction,
                            restitution=restitution, rolling_friction=rolling_friction)
 
+        self._attach(model, [contact, joints], x, r, mat, width=case.arch.width,
+                     friction=fill.interface_friction, local_damping=local_damping,
+                     inertia_scale=inertia_scale,
+                     held=[("voussoir:*", "arch"), (top_layer, "beam held")])
+        self.beam_nodes = np.flatnonzero(np.isin(model.node_block,
+                                                 model.select_blocks(name))).astype(np.int64)
+        self._top_nodes = np.flatnonzero(np.isin(
+            model.node_block, model.select_blocks(top_layer))).astype(np.int64)
+        self._top_range = ((xl - half, xl + half) if self.surfacing == 0
+                           else (float(slab[0, 0]), float(slab[1, 0])))
+        self._n_beam = comm.allreduce(int(self.beam_nodes.size))
+
+    def _attach(self, model, blocks, x, r, mat, *, width: float, friction: float,
+                local_damping: float, inertia_scale: float | None, held) -> None:
+        """Shared by the constructors: the disks ``(x, r)`` of ``mat`` under gravity,
+        touching the blocks with ``friction``; the blocks' density scaling; the blocks
+        ``held`` (``(selection, name)`` pairs) while the fill settles; the voussoirs'
+        dofs; the state before :meth:`settle`."""
+        from masonry_fdem.interactions import DiskBlockContact
+        from masonry_fdem.interactions.disks import Disks
+
+        comm = self.comm
+
         def make(x, r):
-            disks = Disks(x, r, {"fill": mat}, "fill", width=case.arch.width, comm=comm)
+            disks = Disks(x, r, {"fill": mat}, "fill", width=width, comm=comm)
             disks.add_gravity()
-            return disks, DiskBlockContact(disks, model, friction=fill.interface_friction)
+            return disks, DiskBlockContact(disks, model, friction=friction)
 
         self._make_disks = make
-        self.model, self.blocks = model, [contact, joints]
+        self.model, self.blocks = model, blocks
         self.disks, self.coupling = make(x, r)
         self.local_damping = float(local_damping)
         # density scaling of the blocks (their weight kept): the block contact's penalty
@@ -239,18 +261,10 @@ class DiskFillBridge:
         auto = (st["disks"].dt / st[BLOCKS].dt) ** 2
         self.inertia_scale = max(1.0, auto) if inertia_scale is None else float(inertia_scale)
         model.scale_inertia(self.inertia_scale)
-        self._held = [model.fix_blocks("voussoir:*", name="arch"),
-                      model.fix_blocks(top_layer, name="beam held")]
+        self._held = [model.fix_blocks(sel, name=name) for sel, name in held]
         ring_nodes = np.flatnonzero(np.isin(model.node_block,
                                             model.select_blocks("voussoir:*")))
         self._ring_dofs = np.column_stack([2 * ring_nodes, 2 * ring_nodes + 1]).ravel()
-        self.beam_nodes = np.flatnonzero(np.isin(model.node_block,
-                                                 model.select_blocks(name))).astype(np.int64)
-        self._top_nodes = np.flatnonzero(np.isin(
-            model.node_block, model.select_blocks(top_layer))).astype(np.int64)
-        self._top_range = ((xl - half, xl + half) if self.surfacing == 0
-                           else (float(slab[0, 0]), float(slab[1, 0])))
-        self._n_beam = comm.allreduce(int(self.beam_nodes.size))
         self.solver = None
         self.last_steps = 0  # explicit steps of the last load carried
         self.settled = False
