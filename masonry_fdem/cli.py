@@ -11,6 +11,9 @@ Subcommands:
   repair CASE.toml      the same arch unstrengthened and with the case's [[anchors]],
                         side by side in one report, and/or a search for an efficient
                         anchor layout over the case's [search] table
+  bridge CASE.toml      a bridge case ([bridge]): with a continuum fill, the vehicle
+                        loaded to collapse at each position (the critical one); with a
+                        disk fill, the vehicle driven across at its load
   example               print the reference case file
   precompile            compile the numba kernels before an MPI run
 
@@ -293,6 +296,47 @@ def cmd_repair(args) -> int:
     return 0
 
 
+def cmd_bridge(args) -> int:
+    from mpi4py import MPI
+
+    from masonry_fdem.assessment.bridge_case import load_bridge_case
+    from masonry_fdem.assessment.bridge_runs import sweep_bridge, traverse_bridge
+
+    comm = MPI.COMM_WORLD
+    case = load_bridge_case(args.case)  # every problem of the file, before any run
+    out = args.out if args.out is not None else Path(f"out_{case.name}")
+    quiet = args.verbosity < 0
+    if case.fill_model == "disks":
+        if args.positions:
+            raise ValueError("--positions: a disk fill is traversed through the case's "
+                             "vehicle.positions (edit the case)")
+        try:
+            run = traverse_bridge(case, out, pictures=args.pictures, cell=args.cell,
+                                  comm=comm, quiet=quiet)
+        except RuntimeError as exc:  # the fill did not settle: nothing to traverse
+            if comm.rank == 0:
+                print(f"masonry-fdem: {exc}", file=sys.stderr)
+            return 1
+        if comm.rank == 0:
+            print(f"{case.name}: status: {run.line()}")
+            print(f"report: {(Path(out) / 'traverse.md').resolve()}")
+        return 0
+    if args.pictures is not None:
+        raise ValueError("--pictures: a continuum fill's sweep pictures the critical "
+                         "position and the one nearest the pier")
+    res = sweep_bridge(case, out, args.positions or None,
+                       paraview_every=args.paraview_every, comm=comm, quiet=quiet)
+    if comm.rank == 0:
+        c = res.critical
+        if c is None:
+            print(f"{case.name}: no run proved a collapse load (lower bounds only)")
+        else:
+            print(f"{case.name}: critical position x = {c['x']:g} m, collapse load "
+                  f"{c['load'] / 1e3:.1f} kN")
+        print(f"report: {(Path(out) / 'sweep.md').resolve()}")
+    return 0
+
+
 def _progress(args):
     """Progress of `assess`: none with -q; a bar when stdout is a terminal; otherwise one
     line per increment on stdout (a log, a pipe, a batch job)."""
@@ -437,6 +481,32 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--group-size", type=int, default=1,
                    help="MPI ranks per layout run of the search (default 1)")
     q.set_defaults(func=cmd_repair)
+    q = _sub(sub, "bridge", "a bridge case: collapse load against the vehicle's "
+             "position, or a traverse over disk fill",
+             "Run a bridge case file (TOML with [bridge], [[bridge.spans]], [vehicle];\n"
+             "cases/bridge_two_span.toml). With [bridge] fill_model = \"continuum\" (the\n"
+             "default) the vehicle is loaded to collapse at each of its positions, one\n"
+             "rank per position under mpirun: sweep.md (the collapse load per position and\n"
+             "the critical one), sweep.png, the vertical stress and the mechanism at the\n"
+             "critical position and over the pier, a ParaView series per position. With\n"
+             "fill_model = \"disks\" the disk fill is settled under self-weight and the\n"
+             "vehicle driven across at [vehicle] load, equilibrium at each position:\n"
+             "traverse.md, traverse.png, stress pictures for two positions, ParaView.")
+    q.add_argument("case", type=Path, help="bridge case file (TOML)")
+    q.add_argument("--out", type=Path, default=None,
+                   help="output folder (default out_<case name>)")
+    q.add_argument("--positions", type=float, nargs="+", default=None, metavar="X",
+                   help="continuum fill: the vehicle's positions x [m] (default: the "
+                        "case's vehicle.positions)")
+    q.add_argument("--pictures", type=float, nargs="+", default=None, metavar="X",
+                   help="disk fill: positions [m] whose stress is pictured (default: the "
+                        "first and the one nearest the pier)")
+    q.add_argument("--cell", type=float, default=0.25,
+                   help="disk fill: width [m] of the stress-averaging cells (default 0.25)")
+    q.add_argument("--paraview-every", type=int, default=5,
+                   help="continuum fill: a ParaView frame every this many increments "
+                        "(default 5; 0: none)")
+    q.set_defaults(func=cmd_bridge)
     q = _sub(sub, "example", "print the reference case file",
              "Print the reference case file (TOML) of an arch assessment, with every key\n"
              "explained, to start a case from: masonry-fdem example > case.toml")

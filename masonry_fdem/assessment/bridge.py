@@ -268,6 +268,7 @@ def load_bridge(
     stop_drop: float = 0.2,
     grow: float = 1.5,
     rtol: float = 1e-6,
+    callback=None,
     comm: MPI.Comm = MPI.COMM_WORLD,
 ) -> BridgeRun:
     """Self-weight, then the axle loads to collapse (collective).
@@ -284,6 +285,8 @@ def load_bridge(
         grow: an increment that converges easily lets the next grow this many times
             (1: a fixed increment, the same path whatever the iteration counts).
         rtol: Newton's tolerance on the forces.
+        callback: ``callback(load, displacement)`` [N, m] after each converged increment
+            of the live load, the model in that state (e.g. to write a ParaView frame).
     """
     from masonry_fdem.solvers.static import StaticSolver
 
@@ -354,6 +357,8 @@ def load_bridge(
                 run.sigma_yy = cells
             run.u_peak = model.u.x.array.copy()
             run.reactions = {k: v.copy() for k, v in solver.reactions().items()}
+        if callback is not None:
+            callback(run.loads[-1], run.displacements[-1])
 
     res = solver.follow(increment, max_displacement=max_displacement, max_steps=max_steps,
                         peak_drop=min(0.05, stop_drop), stop_drop=stop_drop, grow=grow,

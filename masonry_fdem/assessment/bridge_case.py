@@ -114,15 +114,20 @@ class BridgeCase:
                           seed=d.seed, mesh_size=self.mesh, comm=comm)
 
     @numerical_failures("the bridge run")
-    def run(self, x: float, comm: MPI.Comm = MPI.COMM_WORLD):
+    def run(self, x: float, comm: MPI.Comm = MPI.COMM_WORLD, *, on_model=None):
         """Build the model with the vehicle at ``x`` [m] and load it to collapse
-        (collective). Returns ``(model, BridgeRun)``."""
+        (collective). ``on_model(model, interactions)``, if given, is called once the
+        model is built and returns the ``callback(load, displacement)`` of
+        :func:`~masonry_fdem.assessment.bridge.load_bridge` (or None). Returns
+        ``(model, BridgeRun)``."""
         model, inter, axles = bridge_model(self.bridge, self.materials, self.mortar,
                                            self.interface, self.vehicle, x,
                                            mesh_size=self.mesh, crossed=self.crossed,
                                            comm=comm)
+        cb = on_model(model, inter) if on_model is not None else None
         run: BridgeRun = load_bridge(model, inter, axles, self.interface,
-                                     self.bridge.road_level(), comm=comm, **self.analysis)
+                                     self.bridge.road_level(), callback=cb, comm=comm,
+                                     **self.analysis)
         return model, run
 
 
