@@ -312,7 +312,7 @@ def cmd_bridge(args) -> int:
                              "vehicle.positions (edit the case)")
         try:
             run = traverse_bridge(case, out, pictures=args.pictures, cell=args.cell,
-                                  comm=comm, quiet=quiet)
+                                  max_steps=args.max_steps, comm=comm, quiet=quiet)
         except RuntimeError as exc:  # the fill did not settle: nothing to traverse
             if comm.rank == 0:
                 print(f"masonry-fdem: {exc}", file=sys.stderr)
@@ -503,6 +503,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "first and the one nearest the pier)")
     q.add_argument("--cell", type=float, default=0.25,
                    help="disk fill: width [m] of the stress-averaging cells (default 0.25)")
+    q.add_argument("--max-steps", type=int, default=300_000,
+                   help="disk fill: explicit steps allowed to settle and per position "
+                        "(default 300000)")
     q.add_argument("--paraview-every", type=int, default=5,
                    help="continuum fill: a ParaView frame every this many increments "
                         "(default 5; 0: none)")

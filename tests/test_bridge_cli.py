@@ -142,3 +142,19 @@ def test_missing_bridge_case_is_named(tmp_path, capsys):
     missing = Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0)) / "nowhere.toml"
     assert main(["bridge", str(missing)]) == 2
     assert "nowhere.toml" in capsys.readouterr().err
+
+
+def test_disk_bridge_command_that_does_not_settle_says_so(tmp_path, capsys):
+    """A disk fill given too few explicit steps to settle: exit status 1, the reason
+    printed, no traverse and no report (the traverse itself:
+    tests/test_disk_bridge_traverse.py)."""
+    text = CASE
+    for old, new in DISKS:
+        text = text.replace(old, new, 1)
+    text = text.replace("[bridge.mesh]", "[bridge.disks]\ncount = 220\n\n[bridge.mesh]")
+    case = _write(tmp_path, text)
+    out = case.parent / "o"
+    assert main(["-q", "bridge", str(case), "--out", str(out), "--max-steps", "50"]) == 1
+    if MPI.COMM_WORLD.rank == 0:
+        assert "did not settle under self-weight within 50 steps" in capsys.readouterr().err
+    assert not (out / "traverse.md").exists()

@@ -255,6 +255,8 @@ def traverse_bridge(case, out: str | Path, *, pictures: Sequence[float] | None =
         raise ValueError(f"{case.name}: no vehicle.positions to traverse")
     if not cell > 0:
         raise ValueError(f"cell must be > 0 m, got {cell}")
+    if not (isinstance(max_steps, int) and max_steps >= 1):
+        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
     say = _say(comm, quiet or comm.rank != 0)
     out = Path(out)
     if comm.rank == 0:
