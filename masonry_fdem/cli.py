@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import sys
 from pathlib import Path
 
@@ -300,16 +301,46 @@ def cmd_bridge(args) -> int:
     from mpi4py import MPI
 
     from masonry_fdem.assessment.bridge_case import load_bridge_case
-    from masonry_fdem.assessment.bridge_runs import sweep_bridge, traverse_bridge
+    from masonry_fdem.assessment.bridge_runs import (
+        collapse_bridge,
+        sweep_bridge,
+        traverse_bridge,
+    )
 
     comm = MPI.COMM_WORLD
     case = load_bridge_case(args.case)  # every problem of the file, before any run
     out = args.out if args.out is not None else Path(f"out_{case.name}")
     quiet = args.verbosity < 0
+    if args.collapse and case.fill_model != "disks":
+        raise ValueError("--collapse: the continuum fill is always loaded to collapse (the "
+                         "option is for a disk fill)")
+    if (args.increment is not None or args.max_load is not None) and not args.collapse:
+        raise ValueError("--increment and --max-load go with --collapse (a disk fill)")
+    if args.collapse:
+        if args.increment is None:
+            raise ValueError("--collapse: give the load step, --increment N (the vehicle's "
+                             "total, over the bridge's width)")
+        if args.pictures is not None:
+            raise ValueError("--pictures: with --collapse the fill of every position is "
+                             "pictured at its last load carried")
+        try:
+            runs = collapse_bridge(case, out, args.increment, args.positions or None,
+                                   max_load=args.max_load or math.inf, cell=args.cell,
+                                   max_steps=args.max_steps, comm=comm, quiet=quiet)
+        except RuntimeError as exc:  # a fill that did not settle
+            if comm.rank == 0:
+                print(f"masonry-fdem: {exc}", file=sys.stderr)
+            return 1
+        if comm.rank == 0:
+            for x, r in zip(args.positions or case.positions, runs, strict=True):
+                print(f"{case.name}: vehicle at x = {x:g} m: {r.line()}")
+            print(f"report: {(Path(out) / 'collapse.md').resolve()}")
+        return 0
     if case.fill_model == "disks":
         if args.positions:
             raise ValueError("--positions: a disk fill is traversed through the case's "
-                             "vehicle.positions (edit the case)")
+                             "vehicle.positions (edit the case), or loaded to collapse at "
+                             "them with --collapse")
         try:
             run = traverse_bridge(case, out, pictures=args.pictures, cell=args.cell,
                                   max_steps=args.max_steps, comm=comm, quiet=quiet)
@@ -491,21 +522,30 @@ def build_parser() -> argparse.ArgumentParser:
              "critical position and over the pier, a ParaView series per position. With\n"
              "fill_model = \"disks\" the disk fill is settled under self-weight and the\n"
              "vehicle driven across at [vehicle] load, equilibrium at each position:\n"
-             "traverse.md, traverse.png, stress pictures for two positions, ParaView.")
+             "traverse.md, traverse.png, stress pictures for two positions, ParaView;\n"
+             "with --collapse its load is raised at each position to collapse instead:\n"
+             "collapse.md, collapse.png, the fill's stress at each.")
     q.add_argument("case", type=Path, help="bridge case file (TOML)")
     q.add_argument("--out", type=Path, default=None,
                    help="output folder (default out_<case name>)")
     q.add_argument("--positions", type=float, nargs="+", default=None, metavar="X",
-                   help="continuum fill: the vehicle's positions x [m] (default: the "
-                        "case's vehicle.positions)")
+                   help="continuum fill, or disk fill with --collapse: the vehicle's "
+                        "positions x [m] (default: the case's vehicle.positions)")
     q.add_argument("--pictures", type=float, nargs="+", default=None, metavar="X",
                    help="disk fill: positions [m] whose stress is pictured (default: the "
                         "first and the one nearest the pier)")
     q.add_argument("--cell", type=float, default=0.25,
                    help="disk fill: width [m] of the stress-averaging cells (default 0.25)")
+    q.add_argument("--collapse", action="store_true",
+                   help="disk fill: load the vehicle to collapse at each position (a "
+                        "fresh bridge settled for each) instead of driving it across")
+    q.add_argument("--increment", type=float, default=None, metavar="N",
+                   help="with --collapse: the load step [N] of the vehicle's total")
+    q.add_argument("--max-load", type=float, default=None, metavar="N",
+                   help="with --collapse: stop once this load [N] is carried")
     q.add_argument("--max-steps", type=int, default=300_000,
-                   help="disk fill: explicit steps allowed to settle and per position "
-                        "(default 300000)")
+                   help="disk fill: explicit steps allowed to settle and per position or "
+                        "load (default 300000)")
     q.add_argument("--paraview-every", type=int, default=5,
                    help="continuum fill: a ParaView frame every this many increments "
                         "(default 5; 0: none)")

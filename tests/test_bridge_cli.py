@@ -126,6 +126,12 @@ DISKS = (("[bridge]\n", '[bridge]\nfill_model = "disks"\n'), ("[vehicle]", "[veh
     ((), ["--paraview-every", "-2"], "paraview_every must be an integer >= 0"),
     ((("[bridge]\n", '[bridge]\nfill_model = "disks"\n'),), [], "vehicle.load: missing"),
     (DISKS, ["--positions", "0.5"], "--positions: a disk fill is traversed through"),
+    (DISKS, ["--collapse"], "--collapse: give the load step, --increment N"),
+    (DISKS, ["--increment", "5e3"], "--increment and --max-load go with --collapse"),
+    ((), ["--collapse", "--increment", "5e3"], "--collapse: the continuum fill is always"),
+    (DISKS, ["--collapse", "--increment=-5e3"], "increment must be > 0 N"),
+    (DISKS, ["--collapse", "--increment", "5e3", "--positions", "9"],
+     "at x = 9 m, axle 0 of the vehicle"),
 ])
 def test_bad_bridge_command_is_named(tmp_path, capsys, edits, args, expected):
     text = CASE
@@ -158,3 +164,28 @@ def test_disk_bridge_command_that_does_not_settle_says_so(tmp_path, capsys):
     if MPI.COMM_WORLD.rank == 0:
         assert "did not settle under self-weight within 50 steps" in capsys.readouterr().err
     assert not (out / "traverse.md").exists()
+
+
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget); the "
+                    "disks' parallel part is checked in tests/test_disk_bridge_traverse.py")
+def test_disk_bridge_loaded_in_steps(tmp_path, capsys):
+    """--collapse on the small bridge with 220 disks, two steps of 5 kN: both carried
+    (*load reached*), the road settling more under the second; the report, the curve and
+    the fill's stress written."""
+    text = CASE
+    for old, new in DISKS:
+        text = text.replace(old, new, 1)
+    text = text.replace("[bridge.mesh]", "[bridge.disks]\ncount = 220\n\n[bridge.mesh]")
+    case = _write(tmp_path, text)
+    out = case.parent / "o"
+    assert main(["-q", "bridge", str(case), "--out", str(out), "--collapse", "--increment",
+                 "5e3", "--max-load", "1e4", "--positions", "0.5"]) == 0
+    said = capsys.readouterr().out
+    assert "vehicle at x = 0.5 m: load reached" in said, said
+    text = (out / "collapse.md").read_text(encoding="utf-8")
+    row = re.search(r"^\| 0.5 \| load reached \| ≥ 10.0 \| ≥ 1.02 \| ([\d.]+) \|", text,
+                    flags=re.M)
+    assert row is not None, text
+    assert float(row.group(1)) > 0.0
+    for name in ("collapse.png", "vertical_stress_0.5.png"):
+        assert (out / name).stat().st_size > 1000, name

@@ -21,11 +21,20 @@ averaged from the contact forces over ``cell``-wide cells: the load paths) and
 ``blocks_stress_<x>.png``, and ``paraview/`` (the blocks' ``model.pvd`` and the disks'
 ``disks.pvd``, one frame per position, time = x [m], -1 under self-weight).
 
+With a disk fill the collapse load at each position is :func:`collapse_bridge` (``masonry-fdem
+bridge --collapse --increment N``): for each position the bridge is built and settled
+afresh, then the vehicle's load raised in steps of ``increment``, each held to equilibrium,
+until the ring runs on (:meth:`DiskBridge.collapse`). Writes ``collapse.md`` (per position
+the status, the collapse load or the largest load carried, the steps), ``collapse.png``
+(load against the road's settlement under the vehicle) and ``vertical_stress_<x>.png`` (the
+fill's σ_yy at the last load carried, for every position that carried one).
+
 Units: SI (N, m, Pa); tables in kN and tonnes.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -38,7 +47,7 @@ import numpy as np
 from masonry_fdem.constants import G
 from masonry_fdem.solvers.status import Status
 
-__all__ = ["BridgeSweep", "sweep_bridge", "traverse_bridge"]
+__all__ = ["BridgeSweep", "collapse_bridge", "sweep_bridge", "traverse_bridge"]
 
 
 def _say(comm: MPI.Comm, quiet: bool) -> Callable[..., None]:
@@ -373,6 +382,147 @@ def _traverse_plot(case, run, path: Path) -> None:
     ax.set_ylabel("road settlement under the axle [mm]")
     ok = "" if run.status.status is Status.LOAD_REACHED else f" ({run.status.status.value})"
     ax.set_title(f"{case.name}: {case.load / 1e3:.0f} kN vehicle traversing{ok}", fontsize=9)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def collapse_bridge(case, out: str | Path, increment: float,
+                    positions: Sequence[float] | None = None, *, max_load: float = math.inf,
+                    cell: float = 0.25, max_steps: int = 300_000,
+                    comm: MPI.Comm = MPI.COMM_WORLD, quiet: bool = False) -> list:
+    """The disk-filled bridge of ``case`` loaded to collapse with the vehicle at each of
+    ``positions`` [m] (default ``case.positions``), a fresh bridge settled for each, the
+    load raised in steps of ``increment`` [N] up to ``max_load`` (collective; every rank
+    works on every run). Returns the :class:`~masonry_fdem.assessment.disk_fill.DiskFillRun`
+    of each position; writes the module doc's files to ``out``."""
+    from masonry_fdem.assessment.disk_bridge import draw_bridge_stress
+    from masonry_fdem.assessment.disk_fill import stress_grid
+
+    if case.fill_model != "disks":
+        raise ValueError(f"{case.name}: bridge.fill_model is {case.fill_model!r}: the "
+                         "continuum fill's collapse loads come from sweep_bridge")
+    positions = [float(x) for x in (case.positions if positions is None else positions)]
+    if not positions:
+        raise ValueError(f"{case.name}: no vehicle positions (vehicle.positions, or give "
+                         "them)")
+    half = 0.5 * case.vehicle.patch
+    for x in positions:
+        for k, (xa, _) in enumerate(case.vehicle.axles(x)):
+            case.bridge.check_on_deck(xa, half, f"at x = {x:g} m, axle {k} of the vehicle")
+    if not (math.isfinite(increment) and increment > 0):
+        raise ValueError(f"increment must be > 0 N, got {increment}")
+    if not cell > 0:
+        raise ValueError(f"cell must be > 0 m, got {cell}")
+    if not (isinstance(max_steps, int) and max_steps >= 1):
+        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+    say = _say(comm, quiet or comm.rank != 0)
+    out = Path(out)
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    t0 = time.perf_counter()
+    runs, counts = [], []
+    for x in positions:
+        b = case.disk_bridge(comm)
+        ok = b.settle(tol=case.disks.tol, max_steps=max_steps)
+        rd, rb = b.ratios()
+        if not ok:
+            raise RuntimeError(f"{case.name}: the disk fill did not settle under self-weight "
+                               f"within {max_steps} steps (ratios disks {rd:.1e}, blocks "
+                               f"{rb:.1e}, tol {case.disks.tol:g}): no collapse run at "
+                               f"x = {x:g} m")
+        say(f"vehicle at x = {x:g} m: {b.disks.n} disks settled ({b.steps_held} + "
+            f"{b.steps_free} steps); raising the load by {increment / 1e3:g} kN ...")
+
+        last: dict = {}
+
+        def at(br, load, x=x, last=last):
+            say(f"  {load / 1e3:g} kN carried at x = {x:g} m in {br.last_steps} steps "
+                f"({time.perf_counter() - t0:.0f} s)")
+            # the fill's stress at this equilibrium (the run ends beyond the last one)
+            last.update(grid=stress_grid(br, cell), disks=(br.disks.x.copy(), br.disks.r),
+                        axles=list(br.axles))
+
+        run = b.collapse(case.vehicle, x, increment, max_load=max_load, tol=case.disks.tol,
+                         max_steps=max_steps, runaway=case.disks.runaway, callback=at)
+        say(f"vehicle at x = {x:g} m: {run.line()}")
+        runs.append(run)
+        counts.append(b.disks.n)
+        if last and comm.rank == 0:
+            b.axles = last["axles"]
+            draw_bridge_stress(b, last["grid"], last["disks"], out / f"vertical_stress_{x:g}.png",
+                               title=f"{case.name}: vehicle at x = {x:g} m, "
+                                     f"{run.loads[-1] / 1e3:.0f} kN (the last load carried); "
+                                     "σ_yy in the disk fill")
+    if comm.rank == 0:
+        text = _collapse_text(case, positions, runs, counts, increment, comm.size,
+                              time.perf_counter() - t0)
+        (out / "collapse.md").write_text(text, encoding="utf-8")
+        say(text)
+        _collapse_plot(case, positions, runs, out / "collapse.png")
+    comm.barrier()
+    return runs
+
+
+def _collapse_text(case, positions, runs, counts, increment, size, seconds) -> str:
+    br = case.bridge
+    lines = [
+        f"# {case.name}: collapse load of the disk-filled bridge against the vehicle's "
+        "position", "",
+        f"{len(runs)} position(s), {seconds:.0f} s on {size} rank(s); a fresh bridge "
+        f"({counts[0]} disks) settled for each. {len(br.spans)} span(s) of "
+        f"{br.spans[0].span:g} m, cover {br.cover:g} m (surfacing {br.surfacing:g} m). The "
+        f"vehicle: axles at {list(case.vehicle.offsets)} m from its reference point, "
+        f"relative loads {list(case.vehicle.loads)}, {case.vehicle.patch:g} m tyre patches; "
+        f"its load raised in steps of {increment / 1e3:g} kN (the load is over the "
+        f"{br.width:g} m strip), each held by explicit dynamics to equilibrium (ratios "
+        f"below {case.disks.tol:g}).", "",
+        "| vehicle x [m] | status | collapse load [kN] | [t] | road settlement at the last "
+        "load carried [mm] | explicit steps |", "|---|---|---|---|---|---|"]
+    for x, r in zip(positions, runs, strict=True):
+        c = r.collapse_load
+        load = f"{c / 1e3:.1f}" if c is not None else f"≥ {r.loads[-1] / 1e3:.1f}"
+        t = f"{c / (1e3 * G):.2f}" if c is not None else f"≥ {r.loads[-1] / (1e3 * G):.2f}"
+        lines.append(f"| {x:g} | {r.status.status.value} | {load} | {t} | "
+                     f"{r.displacements[-1] * 1e3:.1f} | {sum(r.steps[1:])} |")
+    proved = [(r.collapse_load, x) for x, r in zip(positions, runs, strict=True)
+              if r.collapse_load is not None]
+    lines.append("")
+    if proved:
+        c, x = min(proved)
+        lines.append(f"Lowest collapse load proved: {c / 1e3:.1f} kN at x = {x:g} m (a "
+                     f"mechanism one step above it, at {(c + increment) / 1e3:.1f} kN).")
+    else:
+        lines.append("No run proved a collapse load (a mechanism): the loads are lower "
+                     "bounds.")
+    lines += ["", "Status: *mechanism*: the ring ran on under the next load (the collapse "
+              "load lies between the last load carried and the next); *load reached*: the "
+              "largest load asked was carried; *not converged*: an equilibrium did not "
+              "come within the steps allowed (a lower bound)."]
+    for x, r in zip(positions, runs, strict=True):
+        lines.append(f"- x = {x:g} m: {r.line()}")
+    return "\n".join(lines) + "\n"
+
+
+def _collapse_plot(case, positions, runs, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    for k, (x, r) in enumerate(zip(positions, runs, strict=True)):
+        d = np.array(r.displacements) * 1e3
+        f = np.array(r.loads) / 1e3
+        ax.plot(d, f, "o-", ms=3, color=f"C{k}", label=f"x = {x:g} m: {r.status.status.value}")
+    ax.set_xlabel("road settlement under the vehicle [mm]")
+    ax.set_ylabel(f"vehicle load [kN per {case.bridge.width:g} m]")
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
+    ax.set_title(f"{case.name}: disk fill loaded to collapse", fontsize=9)
+    ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(path, dpi=120)

@@ -29,7 +29,11 @@ and of the blocks fall below ``tol``, the blocks density-scaled to the disks' st
    quasi-static at each position. A position at which the ring runs on (a voussoir moves
    ``runaway`` under the constant load) is a mechanism: the bridge does not carry the
    vehicle there; one at which neither equilibrium nor runaway comes within
-   ``max_steps`` is *not converged*. Either ends the traverse.
+   ``max_steps`` is *not converged*. Either ends the traverse. Or
+   :meth:`DiskBridge.collapse`: the vehicle at one position, its load raised in equal
+   steps, each held to equilibrium, until the ring runs on (*mechanism*: the collapse
+   load lies between the last load carried and the next), as the single span's
+   :meth:`~masonry_fdem.assessment.disk_fill.DiskFillBridge.load`.
 
 Units: SI (N, m, s, kg); loads over the bridge's ``width``.
 """
@@ -374,6 +378,43 @@ class DiskBridge(DiskFillBridge):
                 callback(self, x)
         run.seconds = time.perf_counter() - t0
         return run
+
+    def collapse(self, vehicle, x: float, increment: float, *, max_load: float = math.inf,
+                 tol: float = 1e-3, max_steps: int = 300_000, every: int = 500,
+                 runaway: float | None = None, callback=None):
+        """The vehicle at ``x`` [m], its total load raised in steps of ``increment`` [N],
+        each held to equilibrium, until the ring runs on (*mechanism*), ``max_load`` is
+        carried (*load reached*) or an equilibrium does not come within ``max_steps``
+        (*not converged*); collective. :meth:`settle` first.
+
+        Returns a :class:`~masonry_fdem.assessment.disk_fill.DiskFillRun`: the loads
+        carried against the road's settlement under the vehicle (its axles' settlements
+        weighted by their shares, from the state under self-weight) [m]; its
+        ``collapse_load`` is the last load carried when the run ends in a mechanism.
+        ``runaway`` [m]: as :meth:`traverse`; ``callback(bridge, load)`` after each
+        equilibrium.
+        """
+        if not self.settled:
+            raise RuntimeError("the disk fill has not settled under self-weight: call "
+                               "settle() first (and check that it returns True)")
+        if not (math.isfinite(increment) and increment > 0):
+            raise ValueError(f"increment must be > 0 N, got {increment}")
+        ref = self.model.u.x.array.copy()
+        self.put_vehicle(vehicle, x, increment)  # (checks the axles on the deck)
+        shares = [w for _, w in vehicle.axles(x)]
+
+        def settlement() -> float:
+            return sum(s * w for s, w in zip(self.axle_settlements(ref), shares, strict=True))
+
+        def at(br, load: float) -> None:
+            br.axles = [(xa, w * load) for (xa, _), w in zip(br.axles, shares, strict=True)]
+            if callback is not None:
+                callback(br, load)
+
+        return self._raise_load(increment, settlement, max_load=max_load, tol=tol,
+                                max_steps=max_steps, every=every,
+                                runaway=0.25 * self.ring_thickness if runaway is None
+                                else runaway, callback=at, mover="the road")
 
 
 def draw_bridge_stress(b: DiskBridge, grid, disks, path, *, title: str = "") -> None:

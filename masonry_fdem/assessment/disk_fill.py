@@ -418,6 +418,18 @@ class DiskFillBridge:
             RuntimeError: the bridge has not settled under self-weight (:meth:`settle`).
             ValueError: a bad increment, tol or runaway.
         """
+        ring_t = self.case.arch.ring_thickness
+        return self._raise_load(increment, lambda: self.beam_settlement() - self.dead_settlement,
+                                max_load=max_load, tol=tol, max_steps=max_steps, every=every,
+                                runaway=0.25 * ring_t if runaway is None else runaway,
+                                callback=callback, mover="the beam")
+
+    def _raise_load(self, increment: float, settlement, *, max_load: float, tol: float,
+                    max_steps: int, every: int, runaway: float, callback,
+                    mover: str) -> DiskFillRun:
+        """The live load's factor raised in steps of ``increment`` [N], each held to
+        equilibrium (:meth:`load`); ``settlement()`` [m] the displacement recorded;
+        ``mover``: what :meth:`beam_settlement` follows, in words."""
         if not self.settled:
             raise RuntimeError("the disk fill has not settled under self-weight: call "
                                "settle() first (and check that it returns True)")
@@ -425,11 +437,10 @@ class DiskFillBridge:
             raise ValueError(f"increment must be > 0 N, got {increment}")
         if not 0 < tol < 1:
             raise ValueError(f"tol must lie in (0, 1), got {tol}")
-        runaway = 0.25 * self.case.arch.ring_thickness if runaway is None else float(runaway)
+        runaway = float(runaway)
         if not runaway > 0:
             raise ValueError(f"runaway must be > 0 m, got {runaway}")
         t0 = time.perf_counter()
-        base = self.dead_settlement
         run = DiskFillRun(RunStatus(Status.NOT_CONVERGED, 0.0, 0.0), increment)
         run.loads.append(0.0)
         run.displacements.append(0.0)
@@ -450,7 +461,7 @@ class DiskFillBridge:
             run.moved, run.ring_moved = moved, ring
             if why == "equilibrium":
                 run.loads.append(p)
-                run.displacements.append(self.beam_settlement() - base)
+                run.displacements.append(settlement())
                 run.steps.append(steps)
                 run.ratios.append(self.ratios())
                 self.last_steps = steps
@@ -463,7 +474,7 @@ class DiskFillBridge:
                 run.status = RunStatus(
                     Status.MECHANISM, last, last,
                     detail=(f"no equilibrium at {p / 1e3:.4g} kN: the ring ran "
-                            f"{ring * 1e3:.1f} mm (the beam {moved * 1e3:.1f} mm) under "
+                            f"{ring * 1e3:.1f} mm ({mover} {moved * 1e3:.1f} mm) under "
                             f"that constant load in {steps} steps (ratios: disks "
                             f"{rd:.1e}, blocks {rb:.1e}); the "
                             f"collapse load lies between {last / 1e3:.4g} and "
@@ -472,7 +483,7 @@ class DiskFillBridge:
                 run.status = RunStatus(
                     Status.NOT_CONVERGED, last, last, at=p,
                     detail=(f"explicit: ratios disks {rd:.1e}, blocks {rb:.1e} after "
-                            f"{steps} steps at {p / 1e3:.4g} kN (tol {tol:g}); the beam "
+                            f"{steps} steps at {p / 1e3:.4g} kN (tol {tol:g}); {mover} "
                             f"moved {moved * 1e3:.2f} mm, the ring {ring * 1e3:.2f} mm"))
             break
         run.seconds = time.perf_counter() - t0
