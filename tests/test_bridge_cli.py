@@ -89,8 +89,10 @@ def _write(tmp_path: Path, text: str) -> Path:
     return path
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size == 1, reason="under mpirun, one rank per position "
+                    "(the suite's budget: 20 s on one process, 10 s on two)")
 def test_bridge_sweep_reports_the_critical_position(tmp_path, capsys):
-    """Two positions, one per rank under mpirun: each run passes its peak; sweep.md lists
+    """Two positions, one per rank: each run passes its peak; sweep.md lists
     both with their loads, and the critical position it names is the one with the lower
     collapse load; the pictures of the critical position and a ParaView series per
     position are written."""
