@@ -309,9 +309,10 @@ def traverse_bridge(case, out: str | Path, *, pictures: Sequence[float] | None =
         if x not in picks:
             return
         grid = stress_grid(br, cell)
+        road = br.road_profile()
         name = f"vertical_stress_{x:g}.png"
         if comm.rank == 0:
-            draw_bridge_stress(br, grid, (br.disks.x, br.disks.r), out / name, title=(
+            draw_bridge_stress(br, grid, (br.disks.x, br.disks.r), out / name, road=road, title=(
                 f"{case.name}: vehicle at x = {x:g} m, {case.load / 1e3:.0f} kN; σ_yy in "
                 "the disk fill"))
         top = float(br.slab[:, 1].max())
@@ -443,7 +444,7 @@ def collapse_bridge(case, out: str | Path, increment: float,
                 f"({time.perf_counter() - t0:.0f} s)")
             # the fill's stress at this equilibrium (the run ends beyond the last one)
             last.update(grid=stress_grid(br, cell), disks=(br.disks.x.copy(), br.disks.r),
-                        axles=list(br.axles))
+                        axles=list(br.axles), road=br.road_profile())
 
         run = b.collapse(case.vehicle, x, increment, max_load=max_load, tol=case.disks.tol,
                          max_steps=max_steps, runaway=case.disks.runaway, callback=at)
@@ -453,7 +454,7 @@ def collapse_bridge(case, out: str | Path, increment: float,
         if last and comm.rank == 0:
             b.axles = last["axles"]
             draw_bridge_stress(b, last["grid"], last["disks"], out / f"vertical_stress_{x:g}.png",
-                               title=f"{case.name}: vehicle at x = {x:g} m, "
+                               road=last["road"], title=f"{case.name}: vehicle at x = {x:g} m, "
                                      f"{run.loads[-1] / 1e3:.0f} kN (the last load carried); "
                                      "σ_yy in the disk fill")
     if comm.rank == 0:

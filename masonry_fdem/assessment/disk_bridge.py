@@ -299,6 +299,19 @@ class DiskBridge(DiskFillBridge):
             out.append(-tot / cnt if cnt else math.nan)
         return out
 
+    def road_profile(self) -> np.ndarray:
+        """``(n, 2)`` [m]: the road (the surfacing's top nodes) as deformed now, sorted by
+        x, the same on every rank (collective)."""
+        X = self.model.X[self._road_nodes]
+        u = self.model.u.x.array
+        mine = X + np.column_stack([u[2 * self._road_nodes], u[2 * self._road_nodes + 1]])
+        pts = np.concatenate([np.reshape(a, (-1, 2)) for a in self.comm.allgather(mine)])
+        pts = pts[np.argsort(pts[:, 0], kind="stable")]
+        # a node shared by two ranks appears twice: keep one
+        keep = np.ones(pts.shape[0], dtype=bool)
+        keep[1:] = np.any(np.abs(np.diff(pts, axis=0)) > 1e-12, axis=1)
+        return pts[keep]
+
     def traverse(self, vehicle, positions: Sequence[float], load: float, *,
                  tol: float = 1e-3, max_steps: int = 300_000, every: int = 500,
                  runaway: float | None = None, ramp: int = 4,
@@ -417,10 +430,13 @@ class DiskBridge(DiskFillBridge):
                                 else runaway, callback=at, mover="the road")
 
 
-def draw_bridge_stress(b: DiskBridge, grid, disks, path, *, title: str = "") -> None:
+def draw_bridge_stress(b: DiskBridge, grid, disks, path, *, title: str = "",
+                       road: np.ndarray | None = None) -> None:
     """Draw :func:`~masonry_fdem.assessment.disk_fill.stress_grid` ``grid`` (compression
     positive, kPa), the disks ``(x, r)``, the blocks' outlines (undeformed) and the
-    vehicle's axles now on the road, into the PNG ``path`` (call on one rank)."""
+    vehicle's axles now on the road, into the PNG ``path`` (call on one rank). ``road``:
+    :meth:`DiskBridge.road_profile` of the same state, drawn as the deformed road (true
+    scale), the axles standing on it."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -447,14 +463,18 @@ def draw_bridge_stress(b: DiskBridge, grid, disks, path, *, title: str = "") -> 
             poly = poly - [0.0, float(poly[:, 1].min()) - b.surface]
         ax.add_patch(Polygon(poly, closed=True, facecolor="0.85", edgecolor="k", lw=0.4,
                              zorder=2))
+    if road is not None:
+        ax.plot(road[:, 0], road[:, 1], "-", color="C0", lw=1.4, zorder=4,
+                label="the road, deformed (true scale)")
+        ax.legend(loc="upper right", fontsize=8)
     half = 0.5 * b._patch
     for xa, p in b.axles:
-        ax.add_patch(Polygon([[xa - half, y_road], [xa + half, y_road],
-                              [xa + half, y_road + 0.06], [xa - half, y_road + 0.06]],
-                             closed=True, facecolor="C0", zorder=3))
-        ax.annotate(f"{p / 1e3:.0f} kN", xy=(xa, y_road + 0.07), xytext=(xa, y_road + 1.0),
+        y = y_road if road is None else float(np.interp(xa, road[:, 0], road[:, 1]))
+        ax.add_patch(Polygon([[xa - half, y], [xa + half, y], [xa + half, y + 0.06],
+                              [xa - half, y + 0.06]], closed=True, facecolor="C0", zorder=4))
+        ax.annotate(f"{p / 1e3:.0f} kN", xy=(xa, y + 0.07), xytext=(xa, y_road + 1.0),
                     ha="center", arrowprops=dict(arrowstyle="-|>", color="C3", lw=2),
-                    zorder=3)
+                    zorder=4)
     # the soil (if any) cropped a metre below the foundations: the fill is the subject
     lo = max(min(float(p[:, 1].min()) for p in b.layout.polygons),
              b.bridge.foundation_level - 1.0)
