@@ -10,7 +10,10 @@ response is quasi-static.
 
 from __future__ import annotations
 
+from mpi4py import MPI
+
 import numpy as np
+import pytest
 from conftest import alternating_grid
 
 from masonry_fdem import Material, Model
@@ -55,6 +58,9 @@ def bend(h: float, d_max: float = 3e-4, t_load: float = 0.03):
     return max(load), joints.energies()["joint_dissipated"], joints, np.array(disp)
 
 
+@pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="one process (the suite's budget: 12 s "
+                    "under mpirun); the joints on two ranks are compared with one in "
+                    "test_parallel.py::test_joints_and_contact_bitwise_same_on_any_rank_count")
 def test_three_point_bending_is_mesh_objective():
     p1, e1, j1, _ = bend(0.02)
     p2, e2, j2, _ = bend(0.01)
