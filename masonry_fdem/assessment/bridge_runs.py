@@ -10,7 +10,8 @@ status; a run that found no peak gives a lower bound, drawn open), for the criti
 position and the one nearest the first pier (or the span's end) ``vertical_stress_<x>.png``
 (σ_yy in the fill, the soil and the arches at the peak: the reference paper's Figure 6) and
 ``mechanism_<x>.png``, and per position a ParaView series ``paraview_<x>/`` (``model.pvd``;
-time = the increment's number, every ``paraview_every`` increments and the last).
+time = the live load's increment, every ``paraview_every`` increments and the last; time 0
+is the model as built, before its self-weight).
 
 :func:`traverse_bridge` (``fill_model = "disks"``;
 :class:`~masonry_fdem.assessment.disk_bridge.DiskBridge`): the disks settled under
@@ -205,7 +206,7 @@ def _sweep_text(case, res: BridgeSweep, size: int, every: int) -> str:
     lines += ["", "Pictures: " + (", ".join(res.pictures) or "none") + "."]
     if every:
         lines.append(f"ParaView: paraview_<x>/model.pvd per position (every {every} "
-                     "increments and the last; time = increment).")
+                     "increments and the last; time = increment, 0 the model as built).")
     return "\n".join(lines) + "\n"
 
 
