@@ -70,6 +70,35 @@ class BridgeSweep:
     seconds: float = 0.0
 
 
+def _positions(case, positions) -> list[float]:
+    """``positions`` (default ``case.positions``) as floats, every axle checked on the deck."""
+    xs = [float(x) for x in (case.positions if positions is None else positions)]
+    if not xs:
+        raise ValueError(f"{case.name}: no vehicle positions (vehicle.positions, or give "
+                         "them)")
+    half = 0.5 * case.vehicle.patch
+    for x in xs:
+        for k, (xa, _) in enumerate(case.vehicle.axles(x)):
+            case.bridge.check_on_deck(xa, half, f"at x = {x:g} m, axle {k} of the vehicle")
+    return xs
+
+
+def _check_disk_args(cell: float, max_steps: int) -> None:
+    if not cell > 0:
+        raise ValueError(f"cell must be > 0 m, got {cell}")
+    if not (isinstance(max_steps, int) and max_steps >= 1):
+        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+
+
+def _folder(out, comm: MPI.Comm) -> Path:
+    """``out`` as a Path, created by rank 0 (collective)."""
+    out = Path(out)
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+    return out
+
+
 def _pier_x(bridge) -> float:
     """x [m] of the first pier's centre, or of the last span's far springing."""
     sp = bridge.springings()
@@ -90,21 +119,11 @@ def sweep_bridge(case, out: str | Path, positions: Sequence[float] | None = None
         raise ValueError(f"{case.name}: bridge.fill_model is {case.fill_model!r}: a sweep "
                          "to collapse needs the continuum fill (a disk fill traverses at a "
                          "fixed load: traverse_bridge)")
-    positions = [float(x) for x in (case.positions if positions is None else positions)]
-    if not positions:
-        raise ValueError(f"{case.name}: no vehicle positions (vehicle.positions, or give "
-                         "them)")
-    half = 0.5 * case.vehicle.patch
-    for x in positions:  # every position checked before any run
-        for k, (xa, _) in enumerate(case.vehicle.axles(x)):
-            case.bridge.check_on_deck(xa, half, f"at x = {x:g} m, axle {k} of the vehicle")
+    positions = _positions(case, positions)  # checked before any run
     if not (isinstance(paraview_every, int) and paraview_every >= 0):
         raise ValueError(f"paraview_every must be an integer >= 0, got {paraview_every!r}")
     say = _say(comm, quiet)
-    out = Path(out)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
+    out = _folder(out, comm)
     t0 = time.perf_counter()
     rows, drawn = [], {}
     for k in range(comm.rank, len(positions), comm.size):
@@ -263,15 +282,9 @@ def traverse_bridge(case, out: str | Path, *, pictures: Sequence[float] | None =
                          'at a fixed load is run with fill_model = "disks"')
     if not case.positions:
         raise ValueError(f"{case.name}: no vehicle.positions to traverse")
-    if not cell > 0:
-        raise ValueError(f"cell must be > 0 m, got {cell}")
-    if not (isinstance(max_steps, int) and max_steps >= 1):
-        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+    _check_disk_args(cell, max_steps)
     say = _say(comm, quiet or comm.rank != 0)
-    out = Path(out)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
+    out = _folder(out, comm)
     t0 = time.perf_counter()
     b = case.disk_bridge(comm)
     say(f"{b.disks.n} disks (r {b.disks.r.min() * 1e3:.0f}–{b.disks.r.max() * 1e3:.0f} mm), "
@@ -405,25 +418,12 @@ def collapse_bridge(case, out: str | Path, increment: float,
     if case.fill_model != "disks":
         raise ValueError(f"{case.name}: bridge.fill_model is {case.fill_model!r}: the "
                          "continuum fill's collapse loads come from sweep_bridge")
-    positions = [float(x) for x in (case.positions if positions is None else positions)]
-    if not positions:
-        raise ValueError(f"{case.name}: no vehicle positions (vehicle.positions, or give "
-                         "them)")
-    half = 0.5 * case.vehicle.patch
-    for x in positions:
-        for k, (xa, _) in enumerate(case.vehicle.axles(x)):
-            case.bridge.check_on_deck(xa, half, f"at x = {x:g} m, axle {k} of the vehicle")
+    positions = _positions(case, positions)
     if not (math.isfinite(increment) and increment > 0):
         raise ValueError(f"increment must be > 0 N, got {increment}")
-    if not cell > 0:
-        raise ValueError(f"cell must be > 0 m, got {cell}")
-    if not (isinstance(max_steps, int) and max_steps >= 1):
-        raise ValueError(f"max_steps must be an integer >= 1, got {max_steps!r}")
+    _check_disk_args(cell, max_steps)
     say = _say(comm, quiet or comm.rank != 0)
-    out = Path(out)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
+    out = _folder(out, comm)
     t0 = time.perf_counter()
     runs, counts = [], []
     for x in positions:
