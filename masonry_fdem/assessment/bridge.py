@@ -30,7 +30,8 @@ from masonry_fdem.interactions.joints import JointMaterial
 from masonry_fdem.materials.elastic import Material
 from masonry_fdem.solvers.status import RunStatus, Status
 
-__all__ = ["BridgeRun", "Vehicle", "bridge_model", "load_bridge"]
+__all__ = ["BridgeRun", "Vehicle", "bridge_model", "joint_share_of_width", "load_bridge",
+           "share_of_width"]
 
 #: the loading beam under each axle: steel, 0.05 m thick
 BEAM = (0.05, Material(density=7850.0, E=210e9, nu=0.3))
@@ -93,6 +94,7 @@ def bridge_model(
     mesh_size: float | Mapping[str, float] = 0.2,
     penalty_factor: float | None = None,
     crossed: bool = False,
+    spandrel_joint: JointMaterial | None = None,
     comm: MPI.Comm = MPI.COMM_WORLD,
 ):
     """The FDEM model of ``bridge`` with ``vehicle`` at ``x`` (collective).
@@ -112,16 +114,28 @@ def bridge_model(
         crossed: mesh the fill, the surfacing and the soil with crossed triangles
             (quadrilaterals split by their diagonals: no locking in their isochoric
             plastic flow; :func:`~masonry_fdem.geometry.meshing.mesh_blocks`).
+        spandrel_joint: the joints of the spandrel walls (between their blocks, and on the
+            ring and the piers) as they are in the walls (default: ``mortar``); the model
+            takes the walls' share of the width of it. It must have a compressive strength
+            ``fc``: the walls' blocks are elastic, and the walls between the end walls would
+            otherwise carry any thrust.
 
     Returns:
         ``(model, [contact, joints], axles)``: ``axles`` the ``(x, share)`` per axle.
+        With spandrel walls, ``model.width_shares`` maps the fill's and the walls'
+        material names to their shares of the width: the model's stresses in them (e.g.
+        in ParaView) are averages over the whole width, their own are these divided by
+        their share (:class:`BridgeRun` ``sigma_yy`` is).
     """
     from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
     from masonry_fdem.model import Model
 
-    m = bridge.materials
+    m = dict(bridge.materials)
     mats = dict(materials)
     needed = {m["masonry"], m["pier"], m["wall"], m["fill"]}
+    share = bridge.spandrel_share
+    if share > 0:
+        needed.add(bridge.spandrel_material)
     if bridge.surfacing > 0:
         needed.add(m["surfacing"])
     if bridge.soil_depth > 0:
@@ -131,13 +145,31 @@ def bridge_model(
         raise BridgeError(f"no material given for {missing}")
     if interface.kn is None or interface.ks is None:
         raise BridgeError("the fill's interface needs explicit kn and ks")
+    if share > 0 and (spandrel_joint or mortar).fc is None:
+        raise BridgeError("the spandrel walls' joints need a compressive strength fc "
+                          "(spandrel_joint, or the mortar): walls of elastic blocks between "
+                          "the end walls would carry any thrust")
     mats["beam"] = BEAM[1]
     lay, axles = _layout(bridge, vehicle, x)
+    if share > 0:
+        # the model is of the whole width: the fill between the walls and the walls each
+        # take their share of it, as materials of their own
+        inner, walls = f"{m['fill']}:between-spandrels", f"{bridge.spandrel_material}:spandrels"
+        mats[inner] = share_of_width(mats[m["fill"]], 1.0 - share)
+        mats[walls] = share_of_width(mats[bridge.spandrel_material], share)
+        lay = BlockLayout(lay.polygons, tuple(
+            inner if n == "fill" else walls if n.startswith("spandrel:") else mat
+            for n, mat in zip(lay.names, lay.materials, strict=True)), lay.names)
+        m["fill"], m["spandrel"] = inner, walls
     part = {v: k for k, v in m.items()}
     if isinstance(mesh_size, Mapping):
-        sizes = [float(mesh_size.get("beam" if n.startswith("beam:") else
-                                     part.get(mat, "masonry"), 0.2)) for n, mat in
-                 zip(lay.names, lay.materials, strict=True)]
+        def size(p: str) -> float:
+            if p == "spandrel":  # the fill's outline: its mesh by default
+                return float(mesh_size.get(p, mesh_size.get("fill", 0.2)))
+            return float(mesh_size.get(p, 0.2))
+
+        sizes = [size("beam" if n.startswith("beam:") else part.get(mat, "masonry"))
+                 for n, mat in zip(lay.names, lay.materials, strict=True)]
     else:
         sizes = [float(mesh_size)] * len(lay)
     sizes = [0.5 * BEAM[0] if n.startswith("beam:") else s
@@ -147,6 +179,9 @@ def bridge_model(
     continua = {m["fill"], m["surfacing"], m["soil"]}
     hyp = {name: "plane_strain" for name in continua if name in lay.materials}
     model = Model(mesh, mats, hypotheses=hyp, width=bridge.width, comm=comm)
+    #: the share of the width of each material that has one (the fill between spandrel
+    #: walls and the walls; see :func:`share_of_width`)
+    model.width_shares = {m["fill"]: 1.0 - share, m["spandrel"]: share} if share > 0 else {}
     model.fix_blocks("wall:*", name="walls")
     fix_soil(model, bridge)
     rigid = [n for n in bridge.foundations() if not bridge.on_soil(n)]
@@ -162,10 +197,20 @@ def bridge_model(
         (m["pier"], m["pier"]): None, (m["pier"], m["wall"]): None}
     others = set(lay.materials)
     soft = [n for n in (m["fill"], m["surfacing"], m["soil"]) if n in others]
+    walls = m.get("spandrel") if share > 0 else None
     for s in soft:
         for o in others:
-            if o != s:
+            if o != s and not (s == m["fill"] and o == walls):
                 table[tuple(sorted((s, o)))] = interface
+    if walls is not None:
+        # the spandrel walls on the ring and the piers, in their share of the mortar; dry
+        # against the end walls (unless those are of the piers' material); the fill beside
+        # them never touches them
+        wall_mortar = joint_share_of_width(spandrel_joint or mortar, share)
+        table[tuple(sorted((walls, m["wall"])))] = None
+        table[(walls, walls)] = wall_mortar  # the head joints
+        table[tuple(sorted((walls, m["masonry"])))] = wall_mortar
+        table[tuple(sorted((walls, m["pier"])))] = wall_mortar
     # the bonded interfaces: the piers and abutments on the soil, the surfacing on the fill
     bonds = {}
     if m["soil"] in others:
@@ -173,9 +218,12 @@ def bridge_model(
     if m["surfacing"] in others:
         bonds[m["fill"]] = [m["surfacing"]]
         # the loading beams bedded on the road; the road's ends on the end walls' tops
-        bonds[m["surfacing"]] = ["beam", m["wall"]]
+        # (and the road on the spandrel walls' tops)
+        bonds[m["surfacing"]] = ["beam", m["wall"]] + ([walls] if walls else [])
     else:
         bonds[m["fill"]] = ["beam"]
+        if walls:
+            bonds[walls] = ["beam"]
     for weak, parts in bonds.items():
         jm = adhesive_interface(interface, mats[weak])
         for o in parts:
@@ -186,10 +234,56 @@ def bridge_model(
             friction[pair] = jm.tan_phi
     contact = BlockContact(model, ContactSettings(
         friction=mortar.tan_phi, friction_table=friction,
+        apart=((m["fill"], walls),) if walls else (),
         **({} if penalty_factor is None else {"penalty_factor": penalty_factor})))
 
     joints = Joints(model, {k: joint_or_contact(v) for k, v in table.items()}, contact=contact)
     return model, [contact, joints], axles
+
+
+#: material fields that scale with the share of the width (forces per unit of the model's
+#: area: stiffnesses, densities, strengths, fracture energies, viscosities); the others
+#: (angles, Poisson's ratio, lengths, ratios) do not
+_SCALED = {"density", "E", "c", "hardening", "c_min", "ft", "Gf", "viscosity"}
+_KEPT = {"nu", "phi", "psi", "d_max", "fit"}
+_JOINT_SCALED = {"kn", "ks", "ft", "GfI", "c", "GfII", "psi_confinement", "fc", "Gfc"}
+
+
+def share_of_width(material: Material, share: float) -> Material:
+    """``material`` as a part of a plane model of width B that fills only ``share`` of it
+    (0 < share <= 1): its stiffness, density, strengths (and the like) times ``share``,
+    so its forces per unit of the model's area are those of the part; its angles and
+    Poisson's ratio unchanged. A Mohr–Coulomb body keeps its yield surface exactly (the
+    cohesion scales with the stresses)."""
+    from dataclasses import fields, replace
+
+    from masonry_fdem.checks import expert
+
+    if not 0.0 < share <= 1.0:
+        raise BridgeError(f"a share of the width must be in (0, 1], got {share}")
+    change = {}
+    for f in fields(material):
+        if f.name in _SCALED:
+            change[f.name] = getattr(material, f.name) * share
+        elif f.name not in _KEPT:
+            raise BridgeError(f"{type(material).__name__}.{f.name}: unknown how it scales "
+                              "with a share of the width")
+    with expert():  # derived from checked inputs: no magnitude check of its own
+        return replace(material, **change)
+
+
+def joint_share_of_width(joint: JointMaterial, share: float) -> JointMaterial:
+    """A joint of a part that fills ``share`` of the model's width (see
+    :func:`share_of_width`): stiffnesses, strengths and fracture energies times
+    ``share``; friction, dilatancy and lengths unchanged."""
+    from dataclasses import fields, replace
+
+    from masonry_fdem.checks import expert
+
+    change = {f.name: getattr(joint, f.name) * share for f in fields(joint)
+              if f.name in _JOINT_SCALED and getattr(joint, f.name) is not None}
+    with expert():
+        return replace(joint, **change)
 
 
 def fix_soil(model, bridge: Bridge) -> None:
@@ -227,7 +321,8 @@ class BridgeRun:
     """Result of :func:`load_bridge`: ``status`` (peak passed, not converged, ...),
     ``loads`` [N] (the vehicle's total) against ``displacements`` [m] (the axles' mean
     settlement under the live load), ``peak`` [N], ``sigma_yy`` per cell [Pa] (gathered
-    on rank 0, over the BlockMesh cells), the displacement (local dofs) and the support
+    on rank 0, over the BlockMesh cells; in the fill between spandrel walls and in the
+    walls their own, not the width's average), the displacement (local dofs) and the support
     reactions ``(R_x, R_y)`` [N] per prescription at the peak, ``seconds``."""
 
     status: RunStatus
@@ -354,7 +449,7 @@ def load_bridge(
                 cells = np.zeros(model.blocks.n_cells)
                 for idx, vals in parts:
                     cells[idx] = vals
-                run.sigma_yy = cells
+                run.sigma_yy = cells / cell_shares(model)
             run.u_peak = model.u.x.array.copy()
             run.reactions = {k: v.copy() for k, v in solver.reactions().items()}
         if callback is not None:
@@ -366,6 +461,15 @@ def load_bridge(
     run.status = res.status
     run.seconds = time.perf_counter() - t0
     return run
+
+
+def cell_shares(model) -> np.ndarray:
+    """Per cell of the BlockMesh, the share of the width its material takes (1 but in the
+    fill between spandrel walls and in the walls)."""
+    b = model.blocks
+    shares = getattr(model, "width_shares", {})
+    per = np.array([shares.get(n, 1.0) for n in b.material_names])
+    return per[b.block_material[b.cell_block]]
 
 
 def replace_detail(st: RunStatus, detail: str) -> RunStatus:

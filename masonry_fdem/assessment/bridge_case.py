@@ -11,6 +11,9 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
     surfacing = 0.1               # [m]
     soil_depth = 3.0              # [m] (0: rigid ground)
     soil_extent = [3.0, 10.5]     # [m] (default: under the whole bridge)
+    width = 5.0                   # [m] the barrel's (default 1: a strip)
+    spandrel_thickness = 0.4      # [m] each of the two spandrel walls (default 0: none;
+    spandrel_block = 0.5          #   continuum fill only), their blocks' length [m]
     [[bridge.spans]]
     span = 6.0                    # [m] and rise, ring_thickness, voussoirs, kind, rings
     ...
@@ -28,6 +31,7 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
                                   #   needs a surfacing and vehicle.load (DiskBridge)
     [materials.stone] ...         # density, E, nu (and c, phi, psi: Mohr–Coulomb)
     [joints.mortar] ...           # the masonry's joints
+    [joints.spandrel] ...         # the spandrel walls' joints (default: the mortar)
     [vehicle]
     offsets = [0.9, -0.9]         # [m] axles from the vehicle's reference point
     loads = [1.0, 1.0]            # relative axle weights
@@ -96,6 +100,7 @@ class BridgeCase:
     fill_model: str = "continuum"
     disks: DiskFillSpec | None = None
     load: float | None = None
+    spandrel_joint: JointMaterial | None = None
 
     def disk_bridge(self, comm: MPI.Comm = MPI.COMM_WORLD):
         """The bridge with its fill as disks (``[bridge] fill_model = "disks"``, its
@@ -123,7 +128,7 @@ class BridgeCase:
         model, inter, axles = bridge_model(self.bridge, self.materials, self.mortar,
                                            self.interface, self.vehicle, x,
                                            mesh_size=self.mesh, crossed=self.crossed,
-                                           comm=comm)
+                                           spandrel_joint=self.spandrel_joint, comm=comm)
         cb = on_model(model, inter) if on_model is not None else None
         run: BridgeRun = load_bridge(model, inter, axles, self.interface,
                                      self.bridge.road_level(), callback=cb, comm=comm,
@@ -165,11 +170,13 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
         pm = bm.materials
         parts = {"masonry": pm.masonry, "pier": pm.pier or pm.masonry,
                  "wall": pm.wall or pm.pier or pm.masonry, "fill": pm.fill,
-                 "surfacing": pm.surfacing, "soil": pm.soil}
+                 "surfacing": pm.surfacing, "soil": pm.soil,
+                 "spandrel": pm.spandrel or pm.pier or pm.masonry}
         kw: dict[str, Any] = dict(pier_height=bm.pier_height, abutment_width=bm.abutment_width,
                                   cover=bm.cover, surfacing=bm.surfacing,
                                   soil_depth=bm.soil_depth, wall_thickness=bm.wall_thickness,
-                                  width=bm.width)
+                                  width=bm.width, spandrel_thickness=bm.spandrel_thickness,
+                                  spandrel_block=bm.spandrel_block)
         if bm.soil_margin is not None:
             kw["soil_margin"] = bm.soil_margin
         if bm.soil_extent is not None:
@@ -179,6 +186,8 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
             used.add(parts["surfacing"])
         if bm.soil_depth > 0:
             used.add(parts["soil"])
+        if bm.spandrel_thickness > 0:
+            used.add(parts["spandrel"])
         known = table("materials") or {}
         for part, m in parts.items():
             if m in used and m not in known:
@@ -191,6 +200,7 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
         defaults = {"masonry": 0.2, "pier": 0.3, "wall": 0.3, "fill": 0.2, "surfacing": 0.1,
                     "soil": 0.4}
         mesh = {part: getattr(bm.mesh, part) or defaults[part] for part in defaults}
+        mesh["spandrel"] = bm.mesh.spandrel or mesh["fill"]
         fm = mats.get(parts["fill"])
         it = bm.interface
         mu = it.tan_phi if it.tan_phi is not None else (
@@ -204,16 +214,29 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
                                 **kw)
             except BridgeError as e:
                 problems.append(f"bridge: {e}")
-    mortar = None
+    mortar = spandrel_joint = None
     joints = table("joints")
     if joints is not None:
         for key in joints:
-            if key != "mortar":
-                problems.append(f"unknown key {key!r} in [joints] (expected mortar)")
+            if key not in ("mortar", "spandrel"):
+                problems.append(f"unknown key {key!r} in [joints] (expected mortar, "
+                                "spandrel)")
         if "mortar" not in joints:
             problems.append("[joints.mortar]: missing table (required)")
         else:
             mortar = parse_joint(joints["mortar"], "joints.mortar", ctx)
+        if "spandrel" in joints:
+            spandrel_joint = parse_joint(joints["spandrel"], "joints.spandrel", ctx)
+            if bm is not None and bm.spandrel_thickness <= 0:
+                problems.append("joints.spandrel: given, but the bridge has no spandrel "
+                                "walls (bridge.spandrel_thickness = 0)")
+        wj = spandrel_joint or mortar
+        if (bm is not None and bm.spandrel_thickness > 0 and bm.fill_model == "continuum"
+                and wj is not None and wj.fc is None):
+            problems.append("joints.spandrel: the spandrel walls' joints need a compressive "
+                            "strength fc (a [joints.spandrel] table, or fc in "
+                            "[joints.mortar]): walls of elastic blocks between the end walls "
+                            "would carry any thrust")
     vehicle, positions = None, ()
     vm = ctx.table(S.VehicleModel, table("vehicle"), "vehicle") if table("vehicle") else None
     if vm is not None:
@@ -241,6 +264,10 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
             problems.append('bridge.surfacing: a bridge with fill_model = "disks" needs a '
                             "surfacing (> 0 m): the vehicle's tyres bear on it, not on "
                             "single disks")
+        if bm.spandrel_thickness > 0:
+            problems.append('bridge.spandrel_thickness: spandrel walls are modelled with a '
+                            'continuum fill only (fill_model = "continuum"): disks would '
+                            "overlap them in the plane")
         if bm.mesh.crossed:
             problems.append('bridge.mesh.crossed: the fill is disks (fill_model = "disks"); '
                             "crossed triangles are for a continuum fill")
@@ -258,4 +285,5 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
     assert bridge is not None and mortar is not None and vehicle is not None
     return BridgeCase(name, bridge, mats, mortar, interface, vehicle, positions, mesh,
                       analysis, bool(bm.mesh.crossed), bm.fill_model, disks,
-                      None if vm is None or vm.load is None else float(vm.load))
+                      None if vm is None or vm.load is None else float(vm.load),
+                      spandrel_joint)

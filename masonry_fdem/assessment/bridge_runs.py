@@ -168,13 +168,14 @@ def sweep_bridge(case, out: str | Path, positions: Sequence[float] | None = None
         now = model.u.x.array.copy()
         model.u.x.array[:] = run.u_peak
         lo, hi = np.percentile(run.sigma_yy / 1e3, [1.0, 99.0])
+        hide = [i for i, n in enumerate(model.blocks.block_names) if n.startswith("spandrel:")]
         plot_blocks(model, out / f"vertical_stress_{x:g}.png", field=run.sigma_yy / 1e3,
-                    cmap="viridis_r", clim=(lo, min(hi, 0.0) if lo < 0 else hi),
+                    cmap="viridis_r", clim=(lo, min(hi, 0.0) if lo < 0 else hi), hide=hide,
                     title=f"vehicle at x = {x:g} m: σ_yy [kPa] at the peak, "
                           f"{run.peak / 1e3:.0f} kN\n(compression < 0; colours clipped at "
                           "1 %, 99 %)")
         model.u.x.array[:] = now
-        plot_blocks(model, out / f"mechanism_{x:g}.png", scale=5.0,
+        plot_blocks(model, out / f"mechanism_{x:g}.png", scale=5.0, hide=hide,
                     title=f"vehicle at x = {x:g} m: deformed ×5 at the end of the run\n"
                           f"{run.line().split(' (')[0]}")
         mine += [f"vertical_stress_{x:g}.png", f"mechanism_{x:g}.png"]

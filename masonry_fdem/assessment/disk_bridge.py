@@ -123,6 +123,9 @@ class DiskBridge(DiskFillBridge):
 
         if not isinstance(bridge, Bridge):
             raise BridgeError(f"a Bridge is needed, got {type(bridge).__name__}")
+        if bridge.spandrel_thickness > 0:
+            raise BridgeError("spandrel walls are modelled with a continuum fill only "
+                              "(bridge_model): the disks would overlap them in the plane")
         if bridge.surfacing <= 0:
             raise BridgeError("a bridge with disk fill needs a surfacing (bridge.surfacing "
                               "> 0): the vehicle's tyres bear on it, not on single disks")

@@ -571,6 +571,7 @@ class BridgePartsModel(_Table):
     fill: str
     surfacing: str = "surfacing"
     soil: str = "soil"
+    spandrel: str | None = None
 
 
 class BridgeInterfaceModel(_Table):
@@ -590,6 +591,7 @@ class BridgeMeshModel(_Table):
     fill: num("m", optional=True, gt=0.0) = None
     surfacing: num("m", optional=True, gt=0.0) = None
     soil: num("m", optional=True, gt=0.0) = None
+    spandrel: num("m", optional=True, gt=0.0) = None
     crossed: bool = False
 
 
@@ -607,6 +609,8 @@ class BridgeModel(_Table):
     soil_extent: Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
     wall_thickness: num("m", "length", gt=0.0) = 0.3
     width: num("m", "width", gt=0.0) = 1.0
+    spandrel_thickness: num("m", ge=0.0) = 0.0
+    spandrel_block: num("m", "length", gt=0.0) = 0.5
     materials: BridgePartsModel
     interface: BridgeInterfaceModel = BridgeInterfaceModel()
     mesh: BridgeMeshModel = BridgeMeshModel()

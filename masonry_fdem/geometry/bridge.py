@@ -11,12 +11,26 @@ Blocks (names): the voussoirs of span ``k`` are ``voussoir:<ring>:<j>@<k>`` (rin
 innermost, ``j`` from the span's left springing); ``abutment:left``, ``abutment:right``;
 ``pier:<i>`` between spans ``i`` and ``i + 1``; ``fill``; ``surfacing`` (if any);
 ``wall:left``, ``wall:right`` (the fill's end walls, on the abutments' outer faces, from
-the foundation level to the road, or to the surfacing, which runs over them); ``soil`` (if any). The spandrel walls of a real bridge
-lie outside this plane; a plane model of a strip of the barrel leaves them out.
+the foundation level to the road, or to the surfacing, which runs over them); ``soil`` (if
+any); ``spandrel:<k>`` (if any, below).
+
+Spandrel walls (``spandrel_thickness`` t > 0): the two masonry walls on the bridge's faces
+that hold the fill between them, standing on the outer ring's extrados and the piers and
+abutments, up to the road (or the surfacing). They lie out of this plane, beside the fill:
+in the plane model they have the fill's outline, overlapping the fill and never touching
+it, cut by vertical head joints into blocks ``spandrel:<k>`` (left to right) about
+``spandrel_block`` long, so that the walls crack where their mortar gives (no bed joints
+within a wall: the blocks are full height). The model
+(:func:`~masonry_fdem.assessment.bridge.bridge_model`) is of the whole bridge width B: the walls take the share 2t/B of it (their masonry's
+stiffness, weight and strengths times that share), the fill the rest, 1 − 2t/B, and the
+interaction of the two (the fill's outward push on the walls, their friction along the
+walls' inner faces) is left out. A strip of the barrel away from the faces has no spandrel
+walls: leave ``spandrel_thickness`` at 0 for it.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -102,8 +116,13 @@ class Bridge:
             (and the end walls) off it stand on rigid ground, none may straddle its edge.
         wall_thickness: thickness [m] of the fill's end walls.
         width: barrel width [m] (out of plane).
+        spandrel_thickness: thickness [m] of each of the two spandrel walls (0: none; see
+            the module doc); the two together must be narrower than ``width``.
+        spandrel_block: length [m] of the spandrel walls' blocks (about: the deck is cut
+            into equal lengths).
         materials: material name per part: "masonry" (voussoirs), "pier" (piers and
-            abutments), "wall", "fill", "surfacing", "soil".
+            abutments), "wall", "fill", "surfacing", "soil", and "spandrel" (the spandrel
+            walls; default: the piers' material).
     """
 
     spans: tuple[Span, ...]
@@ -117,6 +136,8 @@ class Bridge:
     soil_extent: tuple[float, float] | None = None
     wall_thickness: float = 0.3
     width: float = 1.0
+    spandrel_thickness: float = 0.0
+    spandrel_block: float = 0.5
     materials: dict = field(default_factory=lambda: dict(
         masonry="masonry", pier="pier", wall="pier", fill="fill", surfacing="surfacing",
         soil="soil"))
@@ -144,6 +165,12 @@ class Bridge:
         _positive(self.soil_depth, "soil_depth", zero=True)
         _positive(self.wall_thickness, "wall_thickness")
         _positive(self.width, "width")
+        _positive(self.spandrel_thickness, "spandrel_thickness", zero=True)
+        _positive(self.spandrel_block, "spandrel_block")
+        if 2.0 * self.spandrel_thickness >= self.width:
+            raise BridgeError(f"the two spandrel walls (2 × {self.spandrel_thickness:g} m) are "
+                              f"as wide as the bridge (width {self.width:g} m) or wider: "
+                              "there would be no fill between them")
         missing = {"masonry", "pier", "wall", "fill", "surfacing", "soil"} - set(self.materials)
         if missing:
             raise BridgeError(f"materials: no name for {sorted(missing)}")
@@ -187,6 +214,16 @@ class Bridge:
             if poly[:, 1].max() >= road - self.surfacing - 1e-9:
                 raise BridgeError(f"{name} reaches the road: the cover {self.cover} m over "
                                   "the highest crown leaves no fill over it")
+
+    @property
+    def spandrel_share(self) -> float:
+        """The spandrel walls' share 2t/B of the bridge width (0: none)."""
+        return 2.0 * float(self.spandrel_thickness) / float(self.width)
+
+    @property
+    def spandrel_material(self) -> str:
+        """The material name of the spandrel walls (default: the piers')."""
+        return self.materials.get("spandrel", self.materials["pier"])
 
     # ------------------------------------------------------------------ geometry
     def springings(self) -> list[tuple[float, float]]:
@@ -300,6 +337,16 @@ class Bridge:
                          wall_material=m["wall"])
         fill = fl.polygons[fl.names.index("fill")]
         polys, mats, names = [fill], [m["fill"]], ["fill"]
+        if self.spandrel_thickness > 0.0:
+            # beside the fill, out of the plane: the same outline, cut into blocks
+            x0, x1 = self.deck()
+            n = max(1, math.ceil((x1 - x0) / self.spandrel_block - 1e-9))
+            cuts = np.linspace(x0, x1, n + 1)
+            for k in range(n):
+                piece = _dedupe(_slab(fill, cuts[k], cuts[k + 1]))
+                polys.append(piece)
+                mats.append(self.spandrel_material)
+                names.append(f"spandrel:{k}")
         x0, x1 = self.deck()
         t = self.wall_thickness
         if s > 0.0:
@@ -334,6 +381,26 @@ class Bridge:
             if polygon_area(p) <= 0.0:
                 raise BridgeError(f"block {n} has no area (or is clockwise)")
         return out
+
+
+def _slab(poly: np.ndarray, xa: float, xb: float) -> np.ndarray:
+    """The part of the polygon between x = xa and x = xb (Sutherland–Hodgman against the
+    two half planes; one piece for an outline whose vertical sections are intervals, as
+    the fill's are)."""
+    out = np.asarray(poly, dtype=float)
+    for keep in (lambda p: p[0] - xa, lambda p: xb - p[0]):
+        pts = []
+        for i in range(len(out)):
+            p, q = out[i - 1], out[i]
+            dp, dq = keep(p), keep(q)
+            if dq >= 0.0:
+                if dp < 0.0:
+                    pts.append(p + dp / (dp - dq) * (q - p))
+                pts.append(q)
+            elif dp >= 0.0:
+                pts.append(p + dp / (dp - dq) * (q - p))
+        out = np.array(pts)
+    return out
 
 
 def _dedupe(poly: np.ndarray, tol: float = 1e-12) -> np.ndarray:

@@ -32,6 +32,7 @@ def plot_blocks(
     hinges: np.ndarray | None = None,
     hinge_labels: list[str] | None = None,
     hinge_sides: list[float] | None = None,
+    hide: np.ndarray | None = None,
 ) -> Path | None:
     """Draw the blocks in their deformed position, coloured by a field (collective).
 
@@ -60,6 +61,8 @@ def plot_blocks(
             place, with ``hinge_labels`` (e.g. the order of opening) beside them: away
             from the middle of the drawing's base, or towards it where ``hinge_sides``
             is negative (a hinge on an arch's intrados).
+        hide: ids of blocks whose cells are not coloured (their outlines are drawn): bodies
+            that overlap others in the plane, as a bridge's spandrel walls its fill.
 
     Returns:
         The path on rank 0, None on other ranks.
@@ -124,6 +127,9 @@ def plot_blocks(
 
     xy = blocks.x + scale * u
     tri = Triangulation(xy[:, 0], xy[:, 1], blocks.cells)
+    if hide is not None and len(hide):
+        masked = np.isin(blocks.cell_block, np.asarray(hide))
+        tri.set_mask(masked)
     from mpl_toolkits.axes_grid1 import make_axes_locatable
 
     fig, ax = plt.subplots(figsize=(8, 6), dpi=120)

@@ -109,6 +109,9 @@ class ContactSettings:
         rebuild_every: steps between neighbour-list rebuilds (sooner if the accumulated
             travel could exceed the margin, which is what keeps every contact in the
             list; the forces do not depend on it: a candidate out of reach adds zero).
+        apart: pairs of material names whose blocks never touch: bodies that overlap in
+            the plane because they lie side by side out of it (a bridge's spandrel walls
+            and the fill between them).
     """
 
     friction: float = 0.6
@@ -120,6 +123,7 @@ class ContactSettings:
     depth_factor: float = 0.5
     margin: float | None = None
     rebuild_every: int = 50
+    apart: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if self.friction < 0:
@@ -216,6 +220,13 @@ class BlockContact(Interaction):
                     raise ValueError(f"friction_table names unknown material {name!r}")
             i, j = names.index(a), names.index(b)
             self.mu_table[i, j] = self.mu_table[j, i] = mu
+        self.apart_table = np.zeros((nm, nm), dtype=bool)
+        for a, b in s.apart:
+            for name in (a, b):
+                if name not in names:
+                    raise ValueError(f"apart names unknown material {name!r}")
+            i, j = names.index(a), names.index(b)
+            self.apart_table[i, j] = self.apart_table[j, i] = True
         # damping ratios of an impact on a face and on a vertex
         self.zeta = (restitution_damping_ratio(s.restitution, False),
                      restitution_damping_ratio(s.restitution, True))
@@ -546,6 +557,9 @@ class BlockContact(Interaction):
         ba = self.facet_block[pairs[:, 0]]
         bb = self.facet_block[pairs[:, 1]]
         both = np.isin(np.minimum(ba, bb) * nb + np.maximum(ba, bb), self.bonded_pairs)
+        if self.apart_table.any():
+            bm = self.model.blocks.block_material
+            both |= self.apart_table[bm[ba], bm[bb]]
         pairs, counted = pairs[~both], counted[~both]
         # orient each pair by global facet id, so its two passes keep their meaning
         ga = self.ext_gid[pairs[:, 0]]
