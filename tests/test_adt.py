@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 from naive import sweep_pairs
 
-from masonry_fdem.interactions.search.adt import brute_force_pairs, build_adt, inflate, query_adt, self_pairs
+from masonry_fdem.interactions.search.adt import (
+    brute_force_pairs,
+    build_adt,
+    inflate,
+    query_adt,
+    self_pairs,
+)
 
 
 def random_boxes(n: int, dim: int = 2, seed: int = 0, size_ratio: float = 100.0) -> np.ndarray:

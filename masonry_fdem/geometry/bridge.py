@@ -21,10 +21,11 @@ in the plane model they have the fill's outline, overlapping the fill and never 
 it, cut by vertical head joints into blocks ``spandrel:<k>`` (left to right) about
 ``spandrel_block`` long, so that the walls crack where their mortar gives (no bed joints
 within a wall: the blocks are full height). The model
-(:func:`~masonry_fdem.assessment.bridge.bridge_model`) is of the whole bridge width B: the walls take the share 2t/B of it (their masonry's
-stiffness, weight and strengths times that share), the fill the rest, 1 − 2t/B, and the
-interaction of the two (the fill's outward push on the walls, their friction along the
-walls' inner faces) is left out. A strip of the barrel away from the faces has no spandrel
+(:func:`~masonry_fdem.assessment.bridge.bridge_model`) is of the whole bridge width B:
+the walls take the share 2t/B of it (their masonry's stiffness, weight and strengths
+times that share), the fill the rest, 1 − 2t/B, and the interaction of the two (the
+fill's outward push on the walls, their friction along the walls' inner faces) is left
+out. A strip of the barrel away from the faces has no spandrel
 walls: leave ``spandrel_thickness`` at 0 for it.
 """
 
