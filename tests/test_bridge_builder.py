@@ -249,3 +249,25 @@ def test_bad_bridge_case_is_named(changes, expected):
     with pytest.raises(CaseError) as info:
         load_bridge_case(_case(**changes))
     assert expected in str(info.value)
+
+
+def test_mesh_sizes_go_by_part_when_parts_share_a_material():
+    """The ring and the piers of one stone keep their own element sizes: a block's part is
+    told by its name, not its material (by material, the last part named with that stone
+    set the size of all of them)."""
+    b = two_span(materials=dict(masonry="stone", pier="stone", wall="stone", fill="fill",
+                                surfacing="surfacing", soil="soil"))
+    mats = dict(MATS, stone=MATS["pier"])
+    sizes = dict(SIZES, masonry=0.05, pier=0.2, wall=0.2)
+    model, _, _ = bridge_model(b, mats, MORTAR, ITF, Vehicle(patch=0.2), 1.0,
+                               mesh_size=sizes, comm=MPI.COMM_SELF)
+    blocks = model.blocks
+    x = blocks.x
+    c = blocks.cells
+    edge = np.linalg.norm(x[c[:, 1]] - x[c[:, 0]], axis=1)
+    names = np.array(blocks.block_names)[blocks.cell_block]
+    ring = np.char.startswith(names.astype(str), "voussoir:")
+    pier = np.char.startswith(names.astype(str), "pier:")
+    print(f"\nmean edge: ring {edge[ring].mean():.3f} m, pier {edge[pier].mean():.3f} m")
+    assert edge[ring].mean() < 0.08 and edge[pier].mean() > 0.12
+    assert Bridge.part_of("abutment:left") == "pier" and Bridge.part_of("beam:0") is None

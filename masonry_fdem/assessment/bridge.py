@@ -161,15 +161,15 @@ def bridge_model(
             inner if n == "fill" else walls if n.startswith("spandrel:") else mat
             for n, mat in zip(lay.names, lay.materials, strict=True)), lay.names)
         m["fill"], m["spandrel"] = inner, walls
-    part = {v: k for k, v in m.items()}
     if isinstance(mesh_size, Mapping):
         def size(p: str) -> float:
             if p == "spandrel":  # the fill's outline: its mesh by default
                 return float(mesh_size.get(p, mesh_size.get("fill", 0.2)))
             return float(mesh_size.get(p, 0.2))
 
-        sizes = [size("beam" if n.startswith("beam:") else part.get(mat, "masonry"))
-                 for n, mat in zip(lay.names, lay.materials, strict=True)]
+        # each block's part by its name (parts may share a material)
+        sizes = [size("beam" if n.startswith("beam:") else bridge.part_of(n) or "masonry")
+                 for n in lay.names]
     else:
         sizes = [float(mesh_size)] * len(lay)
     sizes = [0.5 * BEAM[0] if n.startswith("beam:") else s

@@ -180,8 +180,10 @@ class DiskBridge(DiskFillBridge):
         self.layout = layout = BlockLayout(tuple(polys), tuple(kinds), tuple(names))
         part = {v: k for k, v in m.items()}
         if isinstance(mesh_size, Mapping):
-            sizes = [float(mesh_size.get(part.get(mat, "masonry"), 0.2))
-                     for mat in layout.materials]
+            # each block's part by its name (parts may share a material); the road slab
+            # by its material
+            sizes = [float(mesh_size.get(bridge.part_of(n) or part.get(mat, "masonry"), 0.2))
+                     for n, mat in zip(layout.names, layout.materials, strict=True)]
         else:
             sizes = [float(mesh_size)] * len(layout)
         hyp = {name: "plane_strain" for name in (m["surfacing"], m["soil"]) if name in

@@ -226,6 +226,17 @@ class Bridge:
         """The material name of the spandrel walls (default: the piers')."""
         return self.materials.get("spandrel", self.materials["pier"])
 
+    @staticmethod
+    def part_of(block: str) -> str | None:
+        """The part ("masonry", "pier", "wall", "fill", "surfacing", "soil", "spandrel") a
+        block of :meth:`layout` belongs to, by its name (None: not a bridge part). By name,
+        not by material: parts may share a material (the stone of the ring and the
+        piers) and still have their own mesh sizes."""
+        head = block.split(":", 1)[0]
+        return {"voussoir": "masonry", "pier": "pier", "abutment": "pier", "wall": "wall",
+                "fill": "fill", "surfacing": "surfacing", "soil": "soil",
+                "spandrel": "spandrel"}.get(head)
+
     # ------------------------------------------------------------------ geometry
     def springings(self) -> list[tuple[float, float]]:
         """``(x_left, x_right)`` [m] of each span's intrados springings."""
