@@ -151,6 +151,7 @@ def bridge_model(
                           "the end walls would carry any thrust")
     mats["beam"] = BEAM[1]
     lay, axles = _layout(bridge, vehicle, x)
+    walls = None  # the spandrel walls' material in the model, if any
     if share > 0:
         # the model is of the whole width: the fill between the walls and the walls each
         # take their share of it, as materials of their own
@@ -197,7 +198,6 @@ def bridge_model(
         (m["pier"], m["pier"]): None, (m["pier"], m["wall"]): None}
     others = set(lay.materials)
     soft = [n for n in (m["fill"], m["surfacing"], m["soil"]) if n in others]
-    walls = m.get("spandrel") if share > 0 else None
     for s in soft:
         for o in others:
             if o != s and not (s == m["fill"] and o == walls):
