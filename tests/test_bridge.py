@@ -339,3 +339,59 @@ def test_limit_analysis_with_the_fills_passive_resistance():
         load_case(small(fill__passive_mobilisation=1.5))
     with pytest.raises(ValueError, match="mobilisation"):
         fill_passive(arch, road=road, unit_weight=gamma, phi=phi, mobilisation=-0.1)
+
+
+def test_backing_fills_the_haunches_up_to_its_level():
+    """``backing`` h: the fill's bed below the level h above the springing becomes a block
+    ``backing:<i>`` on each side, the fill lies on its top; fill and backing together take
+    exactly the space of the fill without backing. The limit analysis takes it as a
+    support: the higher the backing, the more the ring carries; the FDEM model fixes it
+    with the abutments. A backing at the crown, or with disks, is refused by name."""
+    arch = arch_layout(kind="segmental", span=2.0, rise=0.5, ring_thickness=0.15,
+                       voussoirs=15, abutment_height=0.3, abutment_width=0.4)
+    plain = fill_layout(arch, cover=0.2)
+    fl = fill_layout(arch, cover=0.2, backing=0.2, backing_material="rubble")
+    assert fl.names == ("fill", "wall:left", "wall:right", "backing:0", "backing:1")
+    assert fl.materials[3:] == ("rubble", "rubble")
+    total = sum(polygon_area(p) for p, n in zip(fl.polygons, fl.names, strict=True)
+                if n[:4] in ("fill", "back"))
+    assert total == pytest.approx(polygon_area(plain.polygons[0]), rel=1e-12)
+    xmin, _, xmax, _ = arch.bounds
+    for poly, side in zip(fl.polygons[3:], (xmin, xmax), strict=True):
+        assert polygon_area(poly) > 0.0  # counter-clockwise
+        # its top at the level (the springing at y = 0), but where it meets the extrados:
+        # there on the chord the level crosses, at least a quarter of it from its ends (the
+        # chords rise 0.1 m at most here), not at a joint of the ring
+        top = poly[poly[:, 1] > 0.15]
+        assert np.isclose(top[:, 1], 0.2, atol=1e-12).sum() >= 1
+        assert np.abs(top[:, 1] - 0.2).max() < 0.25 * 0.1
+        verts = np.vstack(arch.polygons)
+        corner = top[np.argmin(np.abs(top[:, 0]))]
+        assert np.min(np.linalg.norm(verts - corner, axis=1)) > 0.01
+        assert np.isclose(poly[:, 0], side).any()  # from the end wall
+    # the fill lies on the backing's top, none of it lower
+    fill = fl.polygons[0]
+    assert fill[:, 1].min() == pytest.approx(min(p[p[:, 1] > 0.15, 1].min()
+                                                 for p in fl.polygons[3:]), abs=1e-12)
+    for kw, expected in [(dict(backing=-0.1), "backing must be >= 0"),
+                         (dict(backing=0.7), "reaches the crown")]:
+        with pytest.raises(ValueError, match=expected):
+            fill_layout(arch, cover=0.2, **kw)
+    las = [load_case(small(fill__backing=b)).limit_analysis() for b in (0.0, 0.15)]
+    loads = [la.load_factor for la in las]
+    print("\nLP at quarter span, backing 0 / 0.15 m: "
+          + " / ".join(f"{x / 1e3:.2f}" for x in loads) + " kN")
+    # held on its extrados by the backing, the first voussoir no longer swings out with
+    # the far haunch: the mechanism needs a hinge higher up, and the ring carries more
+    assert [la.status for la in las] == ["collapse", "collapse"]
+    assert loads[1] > 1.2 * loads[0]
+    # a level under the abutments' tops adds nothing (no block)
+    assert "backing:0" not in load_case(small(fill__backing=0.05)).fill_layout().names
+    case = load_case(small(fill__backing=0.2))
+    model, _, _ = build_model(case, MPI.COMM_WORLD)
+    assert {"backing:0", "backing:1"} <= set(model.blocks.block_names)
+    assert "backing" in {p.name for p in model.prescriptions}
+    with pytest.raises(CaseError, match="reaches the crown"):
+        load_case(small(fill__backing=0.7))
+    with pytest.raises(CaseError, match="fill.backing: not with a disk fill"):
+        load_case(small(fill__backing=0.2, fill__model="disks"))

@@ -244,6 +244,10 @@ def _case(**changes) -> dict:
     (dict(bridge__fill_model="disks", vehicle__load=2e5, bridge__mesh__crossed=True),
      "bridge.mesh.crossed: the fill is disks"),
     (dict(vehicle__load=-5.0), "vehicle.load: must be > 0"),
+    (dict(bridge__backing=2.5), "the backing (2.5 m above the springings) reaches span 0's "
+                                "crown"),
+    (dict(bridge__fill_model="disks", vehicle__load=2e5, bridge__backing=0.5),
+     "bridge.backing: the backing is modelled with a continuum fill only"),
 ])
 def test_bad_bridge_case_is_named(changes, expected):
     with pytest.raises(CaseError) as info:
@@ -271,3 +275,46 @@ def test_mesh_sizes_go_by_part_when_parts_share_a_material():
     print(f"\nmean edge: ring {edge[ring].mean():.3f} m, pier {edge[pier].mean():.3f} m")
     assert edge[ring].mean() < 0.08 and edge[pier].mean() > 0.12
     assert Bridge.part_of("abutment:left") == "pier" and Bridge.part_of("beam:0") is None
+
+
+def test_backing_over_the_abutments_and_the_pier():
+    """``backing``: the haunches' backing up to that height above the springings, one
+    block over each abutment and one over the pier joining its two haunches; the fill on
+    their tops takes no more room than before with them. In the model it is of the
+    piers' material (meshed at their size), its own if ``materials["backing"]`` names
+    one; a disk fill refuses it."""
+    plain = two_span(surfacing=0.0)
+    b = two_span(surfacing=0.0, backing=0.25)
+    lay, lay0 = b.layout(), plain.layout()
+    backs = [p for p, n in zip(lay.polygons, lay.names, strict=True) if n.startswith("backing:")]
+    assert [n for n in lay.names if n.startswith("backing:")] == [f"backing:{i}" for i in range(3)]
+    # the middle one over the pier, from one span's extrados to the other's (the pier's
+    # top runs between the two extrados springings, 2.12 and 2.38 m)
+    mid = backs[1]
+    pier = lay.polygons[lay.names.index("pier:0")]
+    top = pier[pier[:, 1] > 0.0]
+    assert mid[:, 0].min() < top[:, 0].min() < top[:, 0].max() < mid[:, 0].max()
+    area = polygon_area(lay.polygons[lay.names.index("fill")]) + sum(map(polygon_area, backs))
+    assert area == pytest.approx(polygon_area(lay0.polygons[lay0.names.index("fill")]), rel=1e-12)
+    assert all(np.isclose(p[:, 1].max(), 0.25, atol=0.06) for p in backs)
+    assert b.part_of("backing:1") == "pier" and b.backing_material == "pier"
+    with pytest.raises(BridgeError, match="backing must be >= 0"):
+        two_span(backing=-0.1)
+    with pytest.raises(BridgeError, match="reaches span 1's crown"):
+        two_span(spans=(SPAN, Span(1.0, 0.2, 0.1, 8)), backing=0.35)
+    mats = dict(MATS, rubble=Material(2000.0, 2e9, 0.2))
+    own = two_span(surfacing=0.0, backing=0.25, materials=dict(
+        masonry="masonry", pier="pier", wall="pier", fill="fill", surfacing="surfacing",
+        soil="soil", backing="rubble"))
+    model, _, _ = bridge_model(own, mats, MORTAR, ITF, Vehicle(patch=0.2), 1.3,
+                               mesh_size=SIZES, comm=MPI.COMM_SELF)
+    names = model.blocks.block_names
+    assert {model.blocks.material_names[model.blocks.block_material[names.index(f"backing:{i}")]]
+            for i in range(3)} == {"rubble"}
+    with pytest.raises(BridgeError, match="no material given for \\['rubble'\\]"):
+        bridge_model(own, MATS, MORTAR, ITF, Vehicle(patch=0.2), 1.3, mesh_size=SIZES,
+                     comm=MPI.COMM_SELF)
+    from masonry_fdem.assessment.disk_bridge import DiskBridge
+
+    with pytest.raises(BridgeError, match="backing is modelled with a continuum fill only"):
+        DiskBridge(two_span(backing=0.25), mats, MORTAR, ITF)

@@ -140,6 +140,8 @@ def bridge_model(
         needed.add(m["surfacing"])
     if bridge.soil_depth > 0:
         needed.add(m["soil"])
+    if bridge.backing > 0:
+        needed.add(bridge.backing_material)
     missing = sorted(needed - set(mats))
     if missing:
         raise BridgeError(f"no material given for {missing}")
@@ -196,6 +198,13 @@ def bridge_model(
         (m["masonry"], m["masonry"]): mortar, (m["masonry"], m["pier"]): mortar,
         # the end walls against the abutments: dry contact
         (m["pier"], m["pier"]): None, (m["pier"], m["wall"]): None}
+    back = bridge.backing_material
+    if bridge.backing > 0 and back != m["pier"]:
+        # the backing on the ring as the ring on its skewbacks; on the piers, the
+        # abutments and against the end walls dry
+        table[tuple(sorted((m["masonry"], back)))] = mortar
+        table[tuple(sorted((m["pier"], back)))] = None
+        table[tuple(sorted((m["wall"], back)))] = None
     others = set(lay.materials)
     soft = [n for n in (m["fill"], m["surfacing"], m["soil"]) if n in others]
     for s in soft:
@@ -211,6 +220,8 @@ def bridge_model(
         table[(walls, walls)] = wall_mortar  # the head joints
         table[tuple(sorted((walls, m["masonry"])))] = wall_mortar
         table[tuple(sorted((walls, m["pier"])))] = wall_mortar
+        if bridge.backing > 0:
+            table[tuple(sorted((walls, back)))] = wall_mortar
     # the bonded interfaces: the piers and abutments on the soil, the surfacing on the fill
     bonds = {}
     if m["soil"] in others:
@@ -230,7 +241,8 @@ def bridge_model(
             table[tuple(sorted((weak, o)))] = jm
     for pair, jm in table.items():
         if jm is not None and pair not in {(m["masonry"], m["masonry"]),
-                                           (m["masonry"], m["pier"])}:
+                                           tuple(sorted((m["masonry"], m["pier"]))),
+                                           tuple(sorted((m["masonry"], back)))}:
             friction[pair] = jm.tan_phi
     contact = BlockContact(model, ContactSettings(
         friction=mortar.tan_phi, friction_table=friction,

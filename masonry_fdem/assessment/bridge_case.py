@@ -14,6 +14,8 @@ materials, the mortar, a ``[vehicle]`` and the positions it traverses.
     width = 5.0                   # [m] the barrel's (default 1: a strip)
     spandrel_thickness = 0.4      # [m] each of the two spandrel walls (default 0: none;
     spandrel_block = 0.5          #   continuum fill only), their blocks' length [m]
+    backing = 0.5                 # [m] the haunches' backing above the springings (default
+                                  #   0: none; continuum fill only)
     [[bridge.spans]]
     span = 6.0                    # [m] and rise, ring_thickness, voussoirs, kind, rings
     ...
@@ -171,12 +173,13 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
         parts = {"masonry": pm.masonry, "pier": pm.pier or pm.masonry,
                  "wall": pm.wall or pm.pier or pm.masonry, "fill": pm.fill,
                  "surfacing": pm.surfacing, "soil": pm.soil,
-                 "spandrel": pm.spandrel or pm.pier or pm.masonry}
+                 "spandrel": pm.spandrel or pm.pier or pm.masonry,
+                 "backing": pm.backing or pm.pier or pm.masonry}
         kw: dict[str, Any] = dict(pier_height=bm.pier_height, abutment_width=bm.abutment_width,
                                   cover=bm.cover, surfacing=bm.surfacing,
                                   soil_depth=bm.soil_depth, wall_thickness=bm.wall_thickness,
                                   width=bm.width, spandrel_thickness=bm.spandrel_thickness,
-                                  spandrel_block=bm.spandrel_block)
+                                  spandrel_block=bm.spandrel_block, backing=bm.backing)
         if bm.soil_margin is not None:
             kw["soil_margin"] = bm.soil_margin
         if bm.soil_extent is not None:
@@ -188,6 +191,8 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
             used.add(parts["soil"])
         if bm.spandrel_thickness > 0:
             used.add(parts["spandrel"])
+        if bm.backing > 0:
+            used.add(parts["backing"])
         known = table("materials") or {}
         for part, m in parts.items():
             if m in used and m not in known:
@@ -268,6 +273,10 @@ def load_bridge_case(source: str | Path | Mapping[str, Any], *,
             problems.append('bridge.spandrel_thickness: spandrel walls are modelled with a '
                             'continuum fill only (fill_model = "continuum"): disks would '
                             "overlap them in the plane")
+        if bm.backing > 0:
+            problems.append('bridge.backing: the backing is modelled with a continuum fill '
+                            'only (fill_model = "continuum"): the disks are packed over the '
+                            "bare extrados")
         if bm.mesh.crossed:
             problems.append('bridge.mesh.crossed: the fill is disks (fill_model = "disks"); '
                             "crossed triangles are for a continuum fill")

@@ -126,6 +126,9 @@ class DiskBridge(DiskFillBridge):
         if bridge.spandrel_thickness > 0:
             raise BridgeError("spandrel walls are modelled with a continuum fill only "
                               "(bridge_model): the disks would overlap them in the plane")
+        if bridge.backing > 0:
+            raise BridgeError("the backing is modelled with a continuum fill only "
+                              "(bridge_model): the disks are packed over the bare extrados")
         if bridge.surfacing <= 0:
             raise BridgeError("a bridge with disk fill needs a surfacing (bridge.surfacing "
                               "> 0): the vehicle's tyres bear on it, not on single disks")

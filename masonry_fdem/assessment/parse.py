@@ -278,8 +278,11 @@ def _parse_fill(m: S.FillModel, mats: Mapping[str, Material], arch: ArchSpec | N
     elif m.disks is not None:
         bad('fill.disks: given, but fill.model is "continuum" (set model = "disks" to pack '
             "the fill with disks)")
+    if m.backing > 0.0 and m.model == "disks":
+        bad("fill.backing: not with a disk fill (the disks are packed over the bare "
+            "extrados); use the continuum fill, or backing = 0")
     return FillSpec(m.cover, mat, mu, kn, size, m.wall_thickness, passive, m.crossed,
-                    m.incline_loads, m.model, disks)
+                    m.incline_loads, m.model, disks, m.backing)
 
 
 def _parse_loading(m: S.LoadingModel, span: float | None, ctx: _Ctx) -> LoadingSpec | None:

@@ -489,7 +489,8 @@ def _lp_fill(case) -> str:
     text = (f"; the fill as RING's, of `{f.material}` (c {m.c / 1e3:g} kPa, φ {m.phi:g}°)"
             + (": its weight," if case.loading.self_weight else ":")
             + f" the load's 2:1 dispersion, passive resistance × {f.passive_mobilisation:g}"
-            + (", loads leaning on steep chords" if f.incline_loads else ""))
+            + (", loads leaning on steep chords" if f.incline_loads else "")
+            + (f"; the backing ({f.backing:g} m) a support" if f.backing > 0 else ""))
     if f.model == "disks":
         text += "; not the disks, nor a road layer"
     return text
@@ -500,7 +501,10 @@ def _fill_text(case) -> str:
     head = (f"- Fill: {f.cover:g} m over the crown's extrados, interface tan δ "
             f"{f.interface_friction:.3g}; ")
     if f.model != "disks":
-        return head + f"a Mohr–Coulomb continuum (`{f.material}`, plane strain)."
+        return head + (f"a Mohr–Coulomb continuum (`{f.material}`, plane strain)"
+                       + (f", on the haunches' backing {f.backing:g} m above the springing "
+                          f"(`{case.arch.abutment_material}`, fixed with the abutments)"
+                          if f.backing > 0 else "") + ".")
     d = f.disks or DiskFillSpec()
     return head + (f"disks ({d.count} asked of the packer; porosity {d.porosity:g}, E "
                    f"{d.E:.3g} Pa, friction {d.friction:g}, rolling friction "

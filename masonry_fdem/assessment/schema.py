@@ -219,6 +219,7 @@ class FillModel(_Table):
     passive_mobilisation: num("", optional=True, ge=0.0, le=1.0) = None
     crossed: bool = False
     incline_loads: bool = False
+    backing: num("m", ge=0.0) = 0.0
 
 
 class LoadingModel(_Table):
@@ -572,6 +573,7 @@ class BridgePartsModel(_Table):
     surfacing: str = "surfacing"
     soil: str = "soil"
     spandrel: str | None = None
+    backing: str | None = None
 
 
 class BridgeInterfaceModel(_Table):
@@ -611,6 +613,7 @@ class BridgeModel(_Table):
     width: num("m", "width", gt=0.0) = 1.0
     spandrel_thickness: num("m", ge=0.0) = 0.0
     spandrel_block: num("m", "length", gt=0.0) = 0.5
+    backing: num("m", ge=0.0) = 0.0
     materials: BridgePartsModel
     interface: BridgeInterfaceModel = BridgeInterfaceModel()
     mesh: BridgeMeshModel = BridgeMeshModel()

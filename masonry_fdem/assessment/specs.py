@@ -164,7 +164,10 @@ class FillSpec:
     dispersion, and a horizontal passive resistance of up to ``passive_mobilisation``
     times Rankine's passive pressure on the extrados; ``incline_loads``: the loads on
     chords steeper than the interface's friction angle lean uphill by the excess
-    (:func:`~masonry_fdem.geometry.fill.fill_loads`)."""
+    (:func:`~masonry_fdem.geometry.fill.fill_loads`). ``backing`` [m]: the haunches'
+    backing, masonry of the abutments' material up to that height above the springing
+    under the fill (``backing:<i>``, fixed with the abutments; its interface with the ring
+    a mortar joint, with the fill the fill's interface); 0: none."""
 
     cover: float
     material: str
@@ -178,6 +181,7 @@ class FillSpec:
     #: "continuum" (Mohr–Coulomb, solved with the case's solver) or "disks" (``disks``)
     model: str = "continuum"
     disks: DiskFillSpec | None = None
+    backing: float = 0.0
 
     def interface(self) -> JointMaterial:
         """The fill's interface as a friction-only joint material."""
@@ -444,7 +448,7 @@ class ArchCase:
         f = self.fill
         fl = fill_layout(structure, cover=f.cover, wall_thickness=f.wall_thickness,
                          road_points=(x - half, x + half), material=f.material,
-                         wall_material=self.arch.abutment_material)
+                         wall_material=self.arch.abutment_material, backing=f.backing)
         road = self.road_level()
         name, t, _ = SPREADER
         beam = np.array([[x - half, road], [x + half, road], [x + half, road + t],
@@ -626,12 +630,23 @@ class ArchCase:
         ``incline`` (default ``[fill] incline_loads``, false): the fill's loads on chords of
         the extrados steeper than its interface friction angle δ lean uphill by the excess
         (the fill's traction can lean at most δ from the extrados' normal; RING takes them
-        vertical). Keywords override the arguments (e.g. ``friction``)."""
+        vertical). With ``[fill] backing`` the backing is a support like the abutments,
+        and the fill's loads and passive resistance act on the extrados above it and on
+        its top. Keywords override the arguments (e.g. ``friction``)."""
         from masonry_fdem.solvers.limit_analysis import limit_analysis
 
         pts = self.extrados_load_points()
         live = [((p[0], p[1]), (0.0, -1.0 / len(pts))) for p in pts]
         dead, bounded = [], []
+        layout, supports = self.layout(), "abutment:*"
+        if self.fill is not None and self.fill.backing > 0.0:
+            fl = self.fill_layout(layout)
+            keep = [i for i, n in enumerate(fl.names) if n.startswith("backing:")]
+            if keep:  # (none where the level lies below the abutments' tops)
+                layout = layout + BlockLayout(tuple(fl.polygons[i] for i in keep),
+                                              tuple(fl.materials[i] for i in keep),
+                                              tuple(fl.names[i] for i in keep))
+                supports = ["abutment:*", "backing:*"]
         if self.fill is not None:
             # the fill as RING models it on a rigid ring: its weight over each chord of the
             # extrados, the load dispersed 2:1, a passive resistance up to m K_p σ_v
@@ -640,7 +655,7 @@ class ArchCase:
             rho = self.material_table[self.fill.material].density
             lean = self.fill.incline_loads if incline is None else incline
             dead, live = fill_loads(
-                self.layout(), road=self.road_level(), unit_weight=rho * G * self.arch.width,
+                layout, road=self.road_level(), unit_weight=rho * G * self.arch.width,
                 patch=(self.load_x(), self.loading.spreader_width),
                 interface_friction=self.fill.interface_friction if lean else None)
             if not self.loading.self_weight:
@@ -650,17 +665,17 @@ class ArchCase:
                 from masonry_fdem.geometry.fill import fill_passive
 
                 bounded = fill_passive(
-                    self.layout(), road=self.road_level(), unit_weight=rho * G * self.arch.width,
+                    layout, road=self.road_level(), unit_weight=rho * G * self.arch.width,
                     phi=fm.phi, cohesion=fm.c, width=self.arch.width,
                     mobilisation=self.fill.passive_mobilisation)
         args = dict(
             density={n: m.density for n, m in self.material_table.items()},
-            width=self.arch.width, supports="abutment:*",
+            width=self.arch.width, supports=supports,
             live_loads=live, dead_loads=dead, bounded_loads=bounded,
             friction=self.analysis.friction, g=G if self.loading.self_weight else 0.0,
             max_load_factor=self.loading.max_load or 1e9)
         args.update(kw)
-        return limit_analysis(self.layout(), **args)
+        return limit_analysis(layout, **args)
 
 
 # ---------------------------------------------------------------------- geometry helpers

@@ -12,7 +12,9 @@ innermost, ``j`` from the span's left springing); ``abutment:left``, ``abutment:
 ``pier:<i>`` between spans ``i`` and ``i + 1``; ``fill``; ``surfacing`` (if any);
 ``wall:left``, ``wall:right`` (the fill's end walls, on the abutments' outer faces, from
 the foundation level to the road, or to the surfacing, which runs over them); ``soil`` (if
-any); ``spandrel:<k>`` (if any, below).
+any); ``spandrel:<k>`` (if any, below); ``backing:<i>`` (if any: the haunches' backing,
+masonry on the piers and abutments against the ring's lower extrados up to ``backing``
+above the springing line, under the fill; left to right).
 
 Spandrel walls (``spandrel_thickness`` t > 0): the two masonry walls on the bridge's faces
 that hold the fill between them, standing on the outer ring's extrados and the piers and
@@ -121,9 +123,11 @@ class Bridge:
             the module doc); the two together must be narrower than ``width``.
         spandrel_block: length [m] of the spandrel walls' blocks (about: the deck is cut
             into equal lengths).
+        backing: height [m] of the haunches' backing above the springing line (0: none);
+            below every span's crown.
         materials: material name per part: "masonry" (voussoirs), "pier" (piers and
-            abutments), "wall", "fill", "surfacing", "soil", and "spandrel" (the spandrel
-            walls; default: the piers' material).
+            abutments), "wall", "fill", "surfacing", "soil", "spandrel" (the spandrel
+            walls; default: the piers' material) and "backing" (default: the piers').
     """
 
     spans: tuple[Span, ...]
@@ -139,6 +143,7 @@ class Bridge:
     width: float = 1.0
     spandrel_thickness: float = 0.0
     spandrel_block: float = 0.5
+    backing: float = 0.0
     materials: dict = field(default_factory=lambda: dict(
         masonry="masonry", pier="pier", wall="pier", fill="fill", surfacing="surfacing",
         soil="soil"))
@@ -168,6 +173,11 @@ class Bridge:
         _positive(self.width, "width")
         _positive(self.spandrel_thickness, "spandrel_thickness", zero=True)
         _positive(self.spandrel_block, "spandrel_block")
+        _positive(self.backing, "backing", zero=True)
+        for k, s in enumerate(self.spans):
+            if self.backing >= s.rise + s.rings * s.ring_thickness:
+                raise BridgeError(f"the backing ({self.backing:g} m above the springings) "
+                                  f"reaches span {k}'s crown")
         if 2.0 * self.spandrel_thickness >= self.width:
             raise BridgeError(f"the two spandrel walls (2 × {self.spandrel_thickness:g} m) are "
                               f"as wide as the bridge (width {self.width:g} m) or wider: "
@@ -226,16 +236,22 @@ class Bridge:
         """The material name of the spandrel walls (default: the piers')."""
         return self.materials.get("spandrel", self.materials["pier"])
 
+    @property
+    def backing_material(self) -> str:
+        """The material name of the backing (default: the piers')."""
+        return self.materials.get("backing", self.materials["pier"])
+
     @staticmethod
     def part_of(block: str) -> str | None:
         """The part ("masonry", "pier", "wall", "fill", "surfacing", "soil", "spandrel") a
-        block of :meth:`layout` belongs to, by its name (None: not a bridge part). By name,
+        block of :meth:`layout` belongs to, by its name (None: not a bridge part; the
+        backing is meshed as the piers, "pier"). By name,
         not by material: parts may share a material (the stone of the ring and the
         piers) and still have their own mesh sizes."""
         head = block.split(":", 1)[0]
         return {"voussoir": "masonry", "pier": "pier", "abutment": "pier", "wall": "wall",
                 "fill": "fill", "surfacing": "surfacing", "soil": "soil",
-                "spandrel": "spandrel"}.get(head)
+                "spandrel": "spandrel", "backing": "pier"}.get(head)
 
     # ------------------------------------------------------------------ geometry
     def springings(self) -> list[tuple[float, float]]:
@@ -346,9 +362,15 @@ class Bridge:
         s = self.surfacing
         fl = fill_layout(st, cover=self.cover - s, wall_thickness=self.wall_thickness,
                          road_points=() if s > 0 else road_points, material=m["fill"],
-                         wall_material=m["wall"])
+                         wall_material=m["wall"], backing=self.backing,
+                         backing_material=self.backing_material)
         fill = fl.polygons[fl.names.index("fill")]
         polys, mats, names = [fill], [m["fill"]], ["fill"]
+        for p, mat, n in zip(fl.polygons, fl.materials, fl.names, strict=True):
+            if n.startswith("backing:"):
+                polys.append(p)
+                mats.append(mat)
+                names.append(n)
         if self.spandrel_thickness > 0.0:
             # beside the fill, out of the plane: the same outline, cut into blocks
             x0, x1 = self.deck()

@@ -27,7 +27,8 @@ __all__ = [
 ]
 
 
-def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None) -> np.ndarray:
+def upper_envelope(layout: BlockLayout, x: np.ndarray,
+                   names: str | tuple[str, ...] | None = None) -> np.ndarray:
     """Highest y [m] of the block outlines on each vertical line x [m] (-inf where no
     block, or none whose name starts with ``names``, spans x)."""
     x = np.atleast_1d(np.asarray(x, dtype=float))
@@ -47,12 +48,15 @@ def upper_envelope(layout: BlockLayout, x: np.ndarray, names: str | None = None)
     return best
 
 
-def extrados_vertices(structure: BlockLayout) -> np.ndarray:
+def extrados_vertices(structure: BlockLayout,
+                       names: str | tuple[str, ...] = "voussoir:") -> np.ndarray:
     """``(k, 2)`` vertices [m] of the voussoirs that lie on their upper envelope (the
-    extrados), in increasing x."""
+    extrados), in increasing x; ``names``: the prefix(es) of the blocks taken (with
+    ``("voussoir:", "backing:")`` the extrados above the haunches' backing and the
+    backing's top)."""
     vs = np.vstack([p for p, n in zip(structure.polygons, structure.names, strict=True)
-                    if n.startswith("voussoir:")])
-    top = upper_envelope(structure, vs[:, 0], "voussoir:")
+                    if n.startswith(names)])
+    top = upper_envelope(structure, vs[:, 0], names)
     on = vs[vs[:, 1] >= top - 1e-9 * np.ptp(vs[:, 0])]
     _, first = np.unique(on[:, 0], return_index=True)
     return on[first]
@@ -71,6 +75,8 @@ def fill_layout(
     road_points: Sequence[float] = (),
     material: str = "fill",
     wall_material: str = "abutment",
+    backing: float = 0.0,
+    backing_material: str | None = None,
 ) -> BlockLayout:
     """The fill over the arch of ``structure`` and its two retaining end walls.
 
@@ -88,13 +94,21 @@ def fill_layout(
         road_points: x [m] that get a vertex on the road (where loads bear).
         material: material name of the fill.
         wall_material: material name of the end walls.
+        backing: height [m] of the haunches' backing above the intrados springing (the
+            lowest voussoir vertex); 0: none. The backing is the masonry (or concrete)
+            built on the abutments and piers against the ring's lower extrados, up to a
+            level top: each stretch where the fill's bed lies below that level becomes a
+            block ``backing:<i>`` (left to right), and the fill lies on its top. The top
+            meets the extrados at least a quarter of a chord from the chord's ends.
+        backing_material: material name of the backing (default ``wall_material``).
 
     Returns:
-        The blocks ``fill``, ``wall:left``, ``wall:right`` (the structure not included).
+        The blocks ``fill``, ``wall:left``, ``wall:right``, then ``backing:<i>`` if any
+        (the structure not included).
 
     Raises:
-        ValueError: no voussoir in ``structure``, a cover or wall thickness <= 0, or a
-            road point off the fill.
+        ValueError: no voussoir in ``structure``, a cover or wall thickness <= 0, a
+            backing < 0 or reaching the crown's extrados, or a road point off the fill.
     """
     if not (np.isfinite(cover) and cover > 0.0):
         raise ValueError(f"fill cover must be > 0 m, got {cover}")
@@ -128,6 +142,19 @@ def fill_layout(
     road = crown + float(cover)
     if bottom[:, 1].max() >= road - tol:
         raise ValueError(f"the abutments reach the road (cover {cover} m over the crown)")
+    backs = []
+    if backing != 0.0:
+        if not (np.isfinite(backing) and backing > 0.0):
+            raise ValueError(f"backing must be >= 0 m above the springing, got {backing}")
+        vs = np.vstack([p for p, n in zip(structure.polygons, structure.names, strict=True)
+                        if n.startswith("voussoir:")])
+        level = float(vs[:, 1].min()) + float(backing)
+        crown = crown_height(structure)
+        if level >= crown - near:
+            raise ValueError(f"the backing ({backing:g} m above the springing, up to y = "
+                             f"{level:g} m) reaches the crown's extrados (y = {crown:g} m): "
+                             "there would be no arch left above it")
+        bottom, backs = _cut_backing(bottom, level, near)
     pts = sorted({float(x) for x in road_points}, reverse=True)
     for x in pts:
         if not xmin < x < xmax:
@@ -137,8 +164,62 @@ def fill_layout(
     t = float(wall_thickness)
     walls = [np.array([(xmin - t, ymin), (xmin, ymin), (xmin, road), (xmin - t, road)]),
              np.array([(xmax, ymin), (xmax + t, ymin), (xmax + t, road), (xmax, road)])]
-    return BlockLayout((fill, *walls), (material, wall_material, wall_material),
-                       ("fill", "wall:left", "wall:right"))
+    bm = wall_material if backing_material is None else backing_material
+    return BlockLayout((fill, *walls, *backs),
+                       (material, wall_material, wall_material, *[bm] * len(backs)),
+                       ("fill", "wall:left", "wall:right",
+                        *[f"backing:{i}" for i in range(len(backs))]))
+
+
+def _crossing(q: np.ndarray, p: np.ndarray, level: float) -> tuple[float, float]:
+    """Where the backing's top meets the bed's chord q–p, which crosses y = ``level``:
+    there, but at least a quarter of the chord from either end, so that no sliver of fill
+    or backing is left and the backing's corner is not at a joint of the ring (where the
+    joint opens; the top then rises or dips there by a fraction of the chord's
+    height)."""
+    t = min(max((level - q[1]) / (p[1] - q[1]), 0.25), 0.75)
+    return (float(q[0] + t * (p[0] - q[0])), float(q[1] + t * (p[1] - q[1])))
+
+
+def _cut_backing(bottom: np.ndarray, level: float, near: float):
+    """Split the fill's bed (a polyline in increasing x) at y = ``level``: ``(new bed,
+    backing polygons)``. Every stretch of the bed below the level becomes a polygon (the
+    bed, counter-clockwise, closed by the level), and the new bed runs along the level
+    over it (from its crossings of the bed, :func:`_crossing`)."""
+    below = bottom[:, 1] < level - near
+    bed, backs = [], []
+    run: list = []
+    for i, p in enumerate(bottom):
+        if below[i]:
+            if not run:
+                run = [(p[0], level) if i == 0 else _crossing(bottom[i - 1], p, level)]
+                bed.append(run[0])
+            run.append(tuple(p))
+            continue
+        if run:
+            end = _crossing(bottom[i - 1], p, level)
+            backs.append(_dedupe_points(run[1:] + [end, run[0]], near))
+            bed.append(end)
+            run = []
+        bed.append(tuple(p))
+    if run:  # the bed ends below the level (at the end wall)
+        end = (bottom[-1][0], level)
+        backs.append(_dedupe_points(run[1:] + [end, run[0]], near))
+        bed.append(end)
+    return _dedupe_points(bed, near), backs
+
+
+def _dedupe_points(points, near: float) -> np.ndarray:
+    """The points without consecutive ones closer than ``near`` (nor a last one at the
+    first)."""
+    keep = [np.asarray(points[0], dtype=float)]
+    for p in points[1:]:
+        p = np.asarray(p, dtype=float)
+        if np.hypot(*(p - keep[-1])) > near:
+            keep.append(p)
+    if len(keep) > 2 and np.hypot(*(keep[-1] - keep[0])) <= near:
+        keep.pop()
+    return np.array(keep)
 
 
 def fill_loads(
@@ -155,7 +236,9 @@ def fill_loads(
     the extrados, and a unit live load on the road dispersed down to the extrados.
 
     Args:
-        structure: the arch and its abutments (voussoirs named ``voussoir:*``).
+        structure: the arch and its abutments (voussoirs named ``voussoir:*``), and the
+            backing (``backing:*``, :func:`fill_layout`) if any: the fill then lies on the
+            extrados above the backing and on the backing's top, whose loads go to it.
         road: y of the road [m].
         unit_weight: γ w, the fill's weight per unit volume times the barrel width [N/m³·m].
         patch: (x centre, width) [m] of the load on the road (width > 0).
@@ -175,18 +258,19 @@ def fill_loads(
     x0, b = float(patch[0]), float(patch[1])
     if not b > 0:
         raise ValueError(f"the load patch needs a width > 0 m, got {b}")
-    xs = extrados_vertices(structure)[:, 0]
+    bed = ("voussoir:", "backing:")
+    xs = extrados_vertices(structure, bed)[:, 0]
     dead, live = [], []
     weights = []
     lean = []  # per chord with live load: Fx / |Fy|
     delta = None if interface_friction is None else math.atan(float(interface_friction))
     for xa, xb in zip(xs[:-1], xs[1:], strict=True):
         t = np.linspace(xa, xb, 9)
-        y = upper_envelope(structure, t, "voussoir:")
+        y = upper_envelope(structure, t, bed)
         depth = road - y
         area = np.trapezoid(depth, t)
         xc = float(np.trapezoid(depth * t, t) / area) if area > 0 else 0.5 * (xa + xb)
-        yc = float(upper_envelope(structure, np.array([xc]), "voussoir:")[0])
+        yc = float(upper_envelope(structure, np.array([xc]), bed)[0])
         tilt = 0.0
         if delta is not None:
             rise = float(y[-1] - y[0])  # the chord's ends (t runs from xa to xb)
@@ -238,7 +322,8 @@ def fill_passive(
     pressure the small sway of an arch mobilises; 1 is the full passive state).
 
     Args:
-        structure: the arch and its abutments (voussoirs named ``voussoir:*``).
+        structure: the arch and its abutments (voussoirs named ``voussoir:*``), and the
+            backing (``backing:*``) if any.
         road: y of the road [m].
         unit_weight: γ w, the fill's unit weight times the barrel width [N/m³·m].
         phi: the fill's friction angle [degrees].
@@ -256,7 +341,7 @@ def fill_passive(
     if not (np.isfinite(cohesion) and cohesion >= 0.0):
         raise ValueError(f"the fill's cohesion must be >= 0 Pa, got {cohesion}")
     kp = passive_coefficient(phi)
-    v = extrados_vertices(structure)
+    v = extrados_vertices(structure, ("voussoir:", "backing:"))
     out = []
     for (xa, ya), (xb, yb) in zip(v[:-1], v[1:], strict=True):
         dy = yb - ya
