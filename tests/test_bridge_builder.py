@@ -277,6 +277,44 @@ def test_mesh_sizes_go_by_part_when_parts_share_a_material():
     assert Bridge.part_of("abutment:left") == "pier" and Bridge.part_of("beam:0") is None
 
 
+def test_joints_go_by_part_when_parts_share_a_material():
+    """A ring, piers and end walls of one stone keep the ring's mortar joints (between
+    voussoirs and on the skewbacks) and the piers' dry contact with the end walls: the
+    joints are chosen by the pair of materials, so the model names the piers' and the
+    walls' stone apart (``stone:pier``, ``stone:wall``). Before, the piers' dry contact
+    (the last entry for the pair stone–stone) replaced every mortar joint of the ring. The
+    same joint segments as with three materials, in the model and in the disk bridge."""
+    from masonry_fdem.assessment.disk_bridge import DiskBridge
+
+    one = dict(masonry="stone", pier="stone", wall="stone", fill="fill",
+               surfacing="surfacing", soil="soil")
+    mats = dict(MATS, stone=MATS["pier"])
+
+    def ring_joints(names: np.ndarray) -> int:
+        """Joint segments between voussoirs, or a voussoir and a pier or abutment."""
+        heads = np.char.partition(names.astype(str), ":")[..., 0]
+        v = heads == "voussoir"
+        return int((v.all(axis=1) | (v.any(axis=1) & np.isin(heads, ("pier", "abutment"))
+                                     .any(axis=1))).sum())
+
+    def segments(bridge, materials):
+        model, inter, _ = bridge_model(bridge, materials, MORTAR, ITF, Vehicle(patch=0.2),
+                                       1.3, mesh_size=SIZES, comm=MPI.COMM_SELF)
+        names = np.array(model.blocks.block_names)[inter[1].seg_blocks]
+        return ring_joints(names), sorted(set(model.blocks.material_names))
+
+    three = segments(two_span(surfacing=0.0), MATS)
+    shared = segments(two_span(surfacing=0.0, materials=one), mats)
+    print(f"\nring joint segments: three materials {three[0]}, one stone {shared[0]}")
+    assert three[0] >= 2 * 13  # two spans of 13 joints (12 voussoirs each)
+    assert shared[0] == three[0]
+    assert {"stone", "stone:pier", "stone:wall"} <= set(shared[1])
+    disk = DiskBridge(two_span(materials=one), dict(mats), MORTAR, ITF, count=300,
+                      mesh_size=SIZES, comm=MPI.COMM_SELF)
+    seg = np.array(disk.model.blocks.block_names)[disk.blocks[1].seg_blocks]
+    assert ring_joints(seg) == three[0]
+
+
 def test_backing_over_the_abutments_and_the_pier():
     """``backing``: the haunches' backing up to that height above the springings, one
     block over each abutment and one over the pier joining its two haunches; the fill on

@@ -31,7 +31,7 @@ from masonry_fdem.materials.elastic import Material
 from masonry_fdem.solvers.status import RunStatus, Status
 
 __all__ = ["BridgeRun", "Vehicle", "bridge_model", "joint_share_of_width", "load_bridge",
-           "share_of_width"]
+           "part_materials", "share_of_width"]
 
 #: the loading beam under each axle: steel, 0.05 m thick
 BEAM = (0.05, Material(density=7850.0, E=210e9, nu=0.3))
@@ -67,6 +67,42 @@ class Vehicle:
         """``(x, share)`` of each axle with the vehicle at ``x`` [m] (shares sum to 1)."""
         total = sum(self.loads)
         return [(x + o, w / total) for o, w in zip(self.offsets, self.loads, strict=True)]
+
+
+def part_materials(bridge: Bridge, layout: BlockLayout,
+                   materials: Mapping[str, Material]) -> tuple[BlockLayout, dict, dict]:
+    """The model's material names by part: the joints between blocks are chosen by the
+    pair of their materials, so the piers and abutments, the backing and the end walls
+    each get a name of their own where their material is one an earlier part (the ring,
+    the piers, the backing) has too: ``<material>:<part>`` (the same
+    :class:`~masonry_fdem.materials.Material`). Without it a ring and piers of one stone
+    had the piers' dry contact for the ring's mortar joints.
+
+    Returns:
+        ``(layout, materials, names)``: the layout relabelled, the materials with the new
+        names added, and the model's material name per part of ``bridge.materials`` (with
+        "backing").
+    """
+    m = dict(bridge.materials)
+    m["backing"] = bridge.backing_material
+    mats = dict(materials)
+    new = dict(m)
+    taken = [m["masonry"]]
+    for part in ("pier", "backing", "wall"):
+        if m[part] in taken:
+            new[part] = f"{m[part]}:{part}"
+            mats[new[part]] = mats[m[part]] if m[part] in mats else None
+        taken.append(m[part])
+    mats = {k: v for k, v in mats.items() if v is not None}
+
+    def label(name: str, mat: str) -> str:
+        part = "backing" if name.startswith("backing:") else Bridge.part_of(name)
+        return new[part] if part in ("pier", "backing", "wall") and mat == m[part] else mat
+
+    lay = BlockLayout(layout.polygons, tuple(
+        label(n, mat) for n, mat in zip(layout.names, layout.materials, strict=True)),
+        layout.names)
+    return lay, mats, new
 
 
 def _layout(bridge: Bridge, vehicle: Vehicle, x: float) -> tuple[BlockLayout, list]:
@@ -153,6 +189,8 @@ def bridge_model(
                           "the end walls would carry any thrust")
     mats["beam"] = BEAM[1]
     lay, axles = _layout(bridge, vehicle, x)
+    # the piers, the backing and the end walls by names of their own (their joints)
+    lay, mats, m = part_materials(bridge, lay, mats)
     walls = None  # the spandrel walls' material in the model, if any
     if share > 0:
         # the model is of the whole width: the fill between the walls and the walls each
@@ -198,8 +236,8 @@ def bridge_model(
         (m["masonry"], m["masonry"]): mortar, (m["masonry"], m["pier"]): mortar,
         # the end walls against the abutments: dry contact
         (m["pier"], m["pier"]): None, (m["pier"], m["wall"]): None}
-    back = bridge.backing_material
-    if bridge.backing > 0 and back != m["pier"]:
+    back = m["backing"]
+    if bridge.backing > 0:
         # the backing on the ring as the ring on its skewbacks; on the piers, the
         # abutments and against the end walls dry
         table[tuple(sorted((m["masonry"], back)))] = mortar

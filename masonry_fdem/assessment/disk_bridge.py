@@ -112,7 +112,7 @@ class DiskBridge(DiskFillBridge):
                  mesh_size: float | Mapping[str, float] = 0.2,
                  inertia_scale: float | None = None, overfill: float = 0.25,
                  comm: MPI.Comm = MPI.COMM_WORLD):
-        from masonry_fdem.assessment.bridge import adhesive_interface, fix_soil
+        from masonry_fdem.assessment.bridge import adhesive_interface, fix_soil, part_materials
         from masonry_fdem.assessment.specs import joint_or_contact
         from masonry_fdem.geometry import polygon_area
         from masonry_fdem.geometry.layout import BlockLayout
@@ -180,7 +180,10 @@ class DiskBridge(DiskFillBridge):
         polys.append(self.slab)
         names.append(self.BEAM)
         kinds.append(m["surfacing"])
-        self.layout = layout = BlockLayout(tuple(polys), tuple(kinds), tuple(names))
+        # the piers and the end walls by material names of their own (their joints)
+        layout, mats, m = part_materials(bridge, BlockLayout(tuple(polys), tuple(kinds),
+                                                             tuple(names)), mats)
+        self.layout = layout
         part = {v: k for k, v in m.items()}
         if isinstance(mesh_size, Mapping):
             # each block's part by its name (parts may share a material); the road slab
