@@ -45,6 +45,21 @@ def _cantilever(comm=MPI.COMM_SELF) -> Model:
     return model
 
 
+def test_a_solve_may_take_more_iterations_than_the_solvers_own():
+    """``solve(..., max_it=)`` allows that many Newton iterations for one solve, then the
+    solver's own again: the cantilever (3+ iterations to 1e-10) fails with one iteration
+    allowed, converges with the one-off allowance, and fails again after it."""
+    s = StaticSolver(_cantilever(), rtol=1e-10, max_it=1)
+    assert s.solve(1.0).reason == "DIVERGED_MAX_IT"
+    res = s.solve(1.0, max_it=20)
+    assert res.converged and res.iterations > 1 and s.max_it == 1
+    s.max_it = 1
+    s.commit()
+    assert not s.solve(2.0).converged
+    with pytest.raises(ValueError, match="max_it"):
+        s.solve(1.0, max_it=0)
+
+
 def test_block_tangent_is_the_derivative_of_the_svk_internal_force():
     """St. Venant–Kirchhoff blocks: the UFL derivative matches central differences of
     the residual at a large, arbitrary displacement (geometric stiffness included)."""

@@ -694,7 +694,7 @@ def assess(
                                     max_iter=an.max_iterations, damping="velocity").solve(0.0)
             solver.dead_factor = 1.0
             solver.commit()
-            r0 = solver.solve(0.0)
+            r0 = solver.solve(0.0, max_it=max(an.newton_iterations, 100))
             # Newton's convergence from there proves the equilibrium, whether or not the
             # relaxation reached its own tolerance first
             ok = r0.converged

@@ -411,6 +411,7 @@ class StaticSolver:
         self,
         load_factor: float = 1.0,
         displacement: Mapping[str, Sequence[float | None]] | None = None,
+        max_it: int | None = None,
     ) -> NewtonResult:
         """Equilibrium under ``f_dead + load_factor · f_live`` (and the prescribed
         displacements), from the committed state; committed if it converges, else the
@@ -420,7 +421,20 @@ class StaticSolver:
             load_factor: factor on the live loads.
             displacement: ``{prescription name: (ux, uy)}`` [m]: total displacements of
                 the prescribed dofs of that prescription (``None``: leave as it is).
+            max_it: Newton iterations for this solve only (default the solver's
+                ``max_it``), e.g. from a state dynamic relaxation left near equilibrium.
         """
+        if max_it is not None:
+            if max_it < 1:
+                raise ValueError(f"max_it must be >= 1, got {max_it}")
+            keep = self.max_it
+            self.max_it = int(max_it)
+            self.snes.setTolerances(max_it=self.max_it)
+            try:
+                return self.solve(load_factor, displacement)
+            finally:
+                self.max_it = keep
+                self.snes.setTolerances(max_it=keep)
         self._moved = bool(displacement)
         if displacement:
             self.prescribe(displacement)
