@@ -281,10 +281,10 @@ def bridge_model(
         jm = adhesive_interface(interface, mats[weak])
         for o in parts:
             table[tuple(sorted((weak, o)))] = jm
+    # the ring's own joints slide at the contact's default friction (the mortar's)
+    ring = {tuple(sorted((m["masonry"], o))) for o in (m["masonry"], m["pier"], back)}
     for pair, jm in table.items():
-        if jm is not None and pair not in {(m["masonry"], m["masonry"]),
-                                           tuple(sorted((m["masonry"], m["pier"]))),
-                                           tuple(sorted((m["masonry"], back)))}:
+        if jm is not None and tuple(sorted(pair)) not in ring:
             friction[pair] = jm.tan_phi
     contact = BlockContact(model, ContactSettings(
         friction=mortar.tan_phi, friction_table=friction,

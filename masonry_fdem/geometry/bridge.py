@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from masonry_fdem.geometry.arches import ArchKind, arch_layout
-from masonry_fdem.geometry.fill import crown_height, fill_layout
+from masonry_fdem.geometry.fill import _dedupe_points, crown_height, fill_layout
 from masonry_fdem.geometry.layout import BlockLayout
 from masonry_fdem.geometry.polygons import polygon_area
 
@@ -304,7 +304,7 @@ class Bridge:
             left = self.spans[i + 1].skewback(i + 1, "left") + [b, 0.0]
             # the top runs straight from one extrados springing to the other
             pts = [[a, yb], [b, yb], *left.tolist(), *right[::-1].tolist()]
-            out.append((f"pier:{i}", _dedupe(np.array(pts))))
+            out.append((f"pier:{i}", _dedupe_points(np.array(pts), 1e-12)))
         sk = self.spans[-1].skewback(len(self.spans) - 1, "right") + [xs[-1][0], 0.0]
         x_out = xs[-1][1] + self.abutment_width
         if x_out < sk[:, 0].max() - 1e-9:
@@ -377,7 +377,7 @@ class Bridge:
             n = max(1, math.ceil((x1 - x0) / self.spandrel_block - 1e-9))
             cuts = np.linspace(x0, x1, n + 1)
             for k in range(n):
-                piece = _dedupe(_slab(fill, cuts[k], cuts[k + 1]))
+                piece = _dedupe_points(_slab(fill, cuts[k], cuts[k + 1]), 1e-12)
                 polys.append(piece)
                 mats.append(self.spandrel_material)
                 names.append(f"spandrel:{k}")
@@ -407,7 +407,7 @@ class Bridge:
                         | {x0 - t, x1 + t} | {lo, hi})
             xs = [x for x in xs if lo <= x <= hi]
             soil = np.vstack([[(lo, yd), (hi, yd)], [(x, yb) for x in xs[::-1]]])
-            polys.append(_dedupe(soil))
+            polys.append(_dedupe_points(soil, 1e-12))
             mats.append(m["soil"])
             names.append("soil")
         out = st + BlockLayout(tuple(polys), tuple(mats), tuple(names))
@@ -436,13 +436,3 @@ def _slab(poly: np.ndarray, xa: float, xb: float) -> np.ndarray:
         out = np.array(pts)
     return out
 
-
-def _dedupe(poly: np.ndarray, tol: float = 1e-12) -> np.ndarray:
-    """Drop consecutive repeated vertices (and a last one equal to the first)."""
-    keep = [poly[0]]
-    for p in poly[1:]:
-        if np.hypot(*(p - keep[-1])) > tol:
-            keep.append(p)
-    if len(keep) > 1 and np.hypot(*(keep[-1] - keep[0])) <= tol:
-        keep.pop()
-    return np.array(keep)
