@@ -155,9 +155,14 @@ def plot_blocks(
                 ax.add_collection(LineCollection(jseg[sel], colors=colour, linewidths=1.6,
                                                  label=JOINT_STATES[code]))
         if np.any(jstate > 0):
-            # below the drawing: neither over the blocks nor over the title
-            ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=4, fontsize=8,
-                      frameon=False, title="joints", title_fontsize=8)
+            # below the drawing: neither over the blocks nor over the title, and a fixed
+            # 34 points under the axes (clear of the tick labels and the x label) however
+            # flat the drawing (a fraction of a wide bridge's short axes was not)
+            from matplotlib.transforms import offset_copy
+
+            below = offset_copy(ax.transAxes, fig=fig, y=-34, units="points")
+            ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below,
+                      ncol=4, fontsize=8, frameon=False, title="joints", title_fontsize=8)
     if disks is not None:
         from matplotlib.collections import PatchCollection
         from matplotlib.patches import Circle
