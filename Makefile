@@ -69,8 +69,10 @@ demo-search: precompile
 
 test: test-serial test-parallel
 
+# one process per test (MPI.COMM_WORLD of size 1), two tests at a time: pytest-xdist
+# workers, a test file to a worker (its module fixtures made once)
 test-serial: precompile
-	$(PY) -m pytest tests -q
+	$(PY) -m pytest tests -q -n $(NP) --dist loadfile
 
 test-parallel: precompile
 	$(MPIRUN) -n $(NP) $(PY) -m pytest tests -q -p no:cacheprovider
