@@ -200,3 +200,26 @@ def test_silo_demo_small(shared_tmp, monkeypatch, capsys):
         assert abs(float(line.split(":")[1].split("%")[0])) < 1.0
         for name in ("history.csv", "discharge.png", "silo_final.png", "disks.pvd"):
             assert (out / name).exists()
+
+
+def test_a_crowd_of_hinge_labels_is_cut_short():
+    """Labels of points closer than the radius share one text; a group of more than
+    MAX_LABELS shows the first (by number) and how many more, instead of a line of 47
+    numbers running over the colour bars (the TRL arch's anchored mechanism picture)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from masonry_fdem.io.plot import MAX_LABELS, label_points
+
+    fig, ax = plt.subplots()
+    crowd = np.c_[np.linspace(0.0, 0.1, 10), np.zeros(10)]  # 10 points 11 mm apart
+    pair = np.array([[5.0, 0.0], [5.01, 0.0]])
+    labels = [str(k) for k in (14, 19, 29, 1, 2, 39, 42, 7, 25, 33)] + ["3", "4"]
+    label_points(ax, np.vstack([crowd, pair]), labels, np.tile([0.0, 1.0], (12, 1)), 0.05)
+    texts = sorted(t.get_text() for t in ax.texts)
+    plt.close(fig)
+    print(f"\nlabels: {texts}")
+    assert MAX_LABELS == 5
+    assert texts == ["1, 2, 7, … +7", "3, 4"]

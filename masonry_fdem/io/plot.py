@@ -218,12 +218,17 @@ def plot_blocks(
     return path
 
 
+#: at most this many labels in one group's text (the rest counted)
+MAX_LABELS = 5
+
+
 def label_points(ax, points, labels, directions, radius: float, **style) -> None:
     """Label points without the labels running over each other: points closer than
     ``radius`` [m] (chained) share one label, their labels joined by commas; it stands
     beyond the group's outermost point along the group's direction (a unit vector per
     point; the first point's counts), aligned so that the text grows away from the
-    points. ``style``: text keywords (fontsize, colour, ...)."""
+    points; a group of more than :data:`MAX_LABELS` labels shows its first ones and how
+    many more. ``style``: text keywords (fontsize, colour, ...)."""
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     n = len(pts)
     group = np.arange(n)
@@ -236,9 +241,16 @@ def label_points(ax, points, labels, directions, radius: float, **style) -> None
         d = np.asarray(directions[idx[0]], dtype=float)
         d = d / max(float(np.hypot(*d)), 1e-300)
         k = idx[np.argmax(pts[idx] @ d)]
-        text = ", ".join(dict.fromkeys(str(labels[i]) for i in idx if str(labels[i])))
-        if not text:
+        names = list(dict.fromkeys(str(labels[i]) for i in idx if str(labels[i])))
+        if not names:
             continue
+        if len(names) > MAX_LABELS:
+            # a crowd (the many hinges of a multi-ring arch): the first few, in order if
+            # they are numbers, and how many more; a long list ran over the colour bars
+            if all(t.isdigit() for t in names):
+                names.sort(key=int)
+            names = names[:MAX_LABELS - 2] + [f"… +{len(names) - MAX_LABELS + 2}"]
+        text = ", ".join(names)
         ha = "left" if d[0] > 0.35 else "right" if d[0] < -0.35 else "center"
         va = "bottom" if d[1] > 0.35 else "top" if d[1] < -0.35 else "center"
         ax.annotate(text, tuple(pts[k]), xytext=tuple(9.0 * d), textcoords="offset points",
