@@ -315,9 +315,11 @@ def _hinges_figure(case, res, path: Path) -> None:
                     arrowprops=dict(arrowstyle="-|>", color="k", lw=1.5, mutation_scale=12))
     peak = res.collapse_load or res.peak_load
     x0, y0 = pts.mean(axis=0)
+    # beside the arrow, not over it: above it the text reached the title on a wide arch
     ax.annotate(f"P = {peak / 1e3:.2f} kN" + ("" if res.collapse_load else " (carried)"),
-                (x0, y0 + 0.15 * span), xytext=(0, 4), textcoords="offset points",
-                ha="center", va="bottom", fontsize=9)
+                (x0, y0 + 0.11 * span), xytext=(5, 0), textcoords="offset points",
+                ha="left", va="center", fontsize=9,
+                bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
     ax.set_aspect("equal")
     ax.autoscale_view()
     lo, hi = ax.get_ylim()
@@ -327,8 +329,13 @@ def _hinges_figure(case, res, path: Path) -> None:
     ax.set_title(f"{case.name}: hinges and line of thrust", fontsize=11)
     ax.grid(alpha=0.2)
     if handles:
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16),
-                  ncol=2, fontsize=8, frameon=False)
+        # a fixed 34 points under the axes, clear of the x label however flat the arch
+        # (a fraction of the axes' height was not)
+        from matplotlib.transforms import offset_copy
+
+        below = offset_copy(ax.transAxes, fig=fig, y=-34, units="points")
+        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  bbox_transform=below, ncol=2, fontsize=8, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=150, bbox_inches="tight")
     plt.close(fig)
