@@ -242,7 +242,7 @@ def _hinges_figure(case, res, path: Path) -> None:
     from matplotlib.collections import LineCollection
     from matplotlib.lines import Line2D
 
-    from masonry_fdem.io.plot import label_points
+    from masonry_fdem.io.plot import label_points, legend_below
 
     layout = case.layout()
     span = case.arch.span
@@ -329,13 +329,7 @@ def _hinges_figure(case, res, path: Path) -> None:
     ax.set_title(f"{case.name}: hinges and line of thrust", fontsize=11)
     ax.grid(alpha=0.2)
     if handles:
-        # a fixed 34 points under the axes, clear of the x label however flat the arch
-        # (a fraction of the axes' height was not)
-        from matplotlib.transforms import offset_copy
-
-        below = offset_copy(ax.transAxes, fig=fig, y=-34, units="points")
-        ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
-                  bbox_transform=below, ncol=2, fontsize=8, frameon=False)
+        legend_below(ax, handles=handles, ncol=2, fontsize=8, frameon=False)
     fig.tight_layout()
     fig.savefig(path, dpi=150, bbox_inches="tight")
     plt.close(fig)

@@ -155,14 +155,9 @@ def plot_blocks(
                 ax.add_collection(LineCollection(jseg[sel], colors=colour, linewidths=1.6,
                                                  label=JOINT_STATES[code]))
         if np.any(jstate > 0):
-            # below the drawing: neither over the blocks nor over the title, and a fixed
-            # 34 points under the axes (clear of the tick labels and the x label) however
-            # flat the drawing (a fraction of a wide bridge's short axes was not)
-            from matplotlib.transforms import offset_copy
-
-            below = offset_copy(ax.transAxes, fig=fig, y=-34, units="points")
-            ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below,
-                      ncol=4, fontsize=8, frameon=False, title="joints", title_fontsize=8)
+            # below the drawing: neither over the blocks nor over the title
+            legend_below(ax, ncol=4, fontsize=8, frameon=False, title="joints",
+                         title_fontsize=8)
     if disks is not None:
         from matplotlib.collections import PatchCollection
         from matplotlib.patches import Circle
@@ -216,6 +211,17 @@ def plot_blocks(
     fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def legend_below(ax, **kw):
+    """A legend centred a fixed 34 points under the axes, clear of the tick labels and the
+    x label however flat the drawing (a fraction of the axes' height, on a wide bridge's
+    short axes, put it over the x label). ``kw``: :meth:`Axes.legend` keywords."""
+    from matplotlib.transforms import offset_copy
+
+    below = offset_copy(ax.transAxes, fig=ax.figure, y=-34, units="points")
+    return ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), bbox_transform=below,
+                     **kw)
 
 
 #: at most this many labels in one group's text (the rest counted)
