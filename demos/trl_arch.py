@@ -149,6 +149,11 @@ if comm.rank == 0:
         e = a.events[0]
         print(f"  anchored: first hinge {e.joint} ({e.kind}) at {e.load / 1e3:.1f} kN = "
               f"{e.load / a.peak_load:.2f} of its largest load (test: 28 t/41 t = 0.68)")
+        print("  anchored: first hinge counted at a wider opening (× the ring thickness): "
+              + "; ".join(f"{fh['ratio']:g}: none" if fh["step"] is None else
+                          f"{fh['ratio']:g}: {fh['joint']} at {fh['load'] / 1e3:.1f} kN = "
+                          f"{fh['load'] / a.peak_load:.2f}" for fh in a.first_hinges
+                          if fh["ratio"] != case.analysis.hinge_opening))
     for name, r in (("unstrengthened", u), ("anchored", a)):
         print(f"  {name}: ring separation (widest opening over the run; x-extent opened "
               f"by more than {r.ring_separation[0]['threshold'] * 1e3:.2f} mm, of the span): "

@@ -152,6 +152,34 @@ def test_dry_arch_four_hinges_and_limit_analysis(dry_runs):
     assert np.all(np.diff(res.displacements[: k + 1]) > 0)
 
 
+def test_the_first_hinge_is_counted_at_wider_openings_too(dry_runs):
+    """The first hinge at the case's opening (the sequence's) and at 1e-3 and 1e-2 of the
+    ring thickness: each where an end of its joint had opened that far, none before the
+    narrower opening's, and the table in the report."""
+    from masonry_fdem.assessment.assess import HINGE_OPENINGS
+
+    res = dry_runs[2000.0]
+    fh = res.first_hinges
+    print("\nfirst hinge: " + "; ".join(
+        f"{x['ratio']:g}: {x['joint']} at step {x['step']}, {x['load']:.1f} N, opened "
+        f"{x['opening'] * 1e3:.3f} mm" for x in fh if x["step"] is not None))
+    t = DRY_ARCH["arch"]["ring_thickness"]
+    assert [x["ratio"] for x in fh] == sorted({1e-4, *HINGE_OPENINGS})
+    first = next(e for e in res.events if e.kind == "hinge")
+    assert fh[0]["load"] == first.load and fh[0]["displacement"] == first.displacement
+    steps = [x["step"] for x in fh]
+    assert all(s is not None for s in steps), steps  # the dry arch turns to a mechanism
+    assert steps == sorted(steps) and steps[-1] > steps[0], steps
+    for x in fh:
+        assert x["opening"] > x["ratio"] * t, x
+        assert res.loads[x["step"]] == x["load"] and x["side"] in ("intrados", "extrados")
+    text = (res.folder / "report.md").read_text(encoding="utf-8")
+    assert "| opening / ring thickness | first hinge |" in text
+    assert f"| 0.01 | {fh[-1]['joint']} | {fh[-1]['side']} |" in text
+    assert json.loads((res.folder / "summary.json").read_text())["first_hinges"][-1][
+        "step"] == steps[-1]
+
+
 def test_dry_arch_fdem_thrust_line_touches_the_faces_at_its_hinges(dry_runs):
     """The FDEM's line of thrust at the peak (where the resultant of the contact forces
     across each radial joint crosses it): inside the ring at every joint, and at the

@@ -372,6 +372,7 @@ def test_collapse_run_resumes_bitwise(tmp_path, deterministic_lu, dry_reference)
     assert res.status == ref.status
     assert [e.joint for e in res.events] == [e.joint for e in ref.events]
     assert [e.joint for e in res.hinges_at_collapse] == [e.joint for e in ref.hinges_at_collapse]
+    assert res.first_hinges == ref.first_hinges
     assert (root / "run" / "report.md").is_file()
     assert not (root / "run" / "checkpoint").exists()
 

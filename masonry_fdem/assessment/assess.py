@@ -37,7 +37,10 @@ CASE.toml`` on the command line):
    contact; an elastic opening of intact mortar is no hinge). One end open, the other
    not: a hinge (its side, intrados or extrados, named); both ends open: the joint has
    separated. Mortar crushed at a joint is an event of its own (*crushed*). The first
-   load at which each joint does so is the hinge sequence.
+   load at which each joint does so is the hinge sequence. Where a hinge counts from is
+   a matter of definition (a crack an observer could not see, or one he could), so the
+   first hinge is also reported at wider openings, ``HINGE_OPENINGS`` × the ring
+   thickness (:attr:`Assessment.first_hinges`).
 
 Every output goes to one run folder, written only when the run is complete (the files
 are assembled in a hidden sibling folder and moved in at the end; a run that fails
@@ -72,10 +75,16 @@ from masonry_fdem.checks import numerical_failures
 from masonry_fdem.io.rundir import run_folder_problem
 from masonry_fdem.solvers.status import RunStatus, Status
 
-__all__ = ["Assessment", "JointEvent", "anchor_state", "assess", "build_model",
+__all__ = ["HINGE_OPENINGS", "Assessment", "JointEvent", "anchor_state", "assess", "build_model",
            "status_dict", "status_from_dict"]
 
 log = logging.getLogger(__name__)
+
+
+#: wider openings (× the joint's length, the ring thickness) at which the first hinge is
+#: also reported, beside ``hinge_opening``'s: 0.1 mm and 1 mm on a 0.1 m ring, the
+#: second a crack an observer sees (a relative rotation of the blocks of about 0.01 rad)
+HINGE_OPENINGS = (1e-3, 1e-2)
 
 
 @dataclass(frozen=True)
@@ -178,6 +187,11 @@ class Assessment:
     anchor_peaks: list[dict] = field(default_factory=list)
     ring_separation: list[dict] = field(default_factory=list)
     ring_separation_at_peak: list[dict] = field(default_factory=list)
+    #: the first hinge counted at each opening, ``hinge_opening`` and ``HINGE_OPENINGS``
+    #: (× the joint's length): per opening ``ratio``, ``opening`` [m] (of the first
+    #: hinge's joint), ``step`` (the curve's index), ``joint``, ``side``, ``s``, ``load``
+    #: [N] and ``displacement`` [m]; ``step`` and the rest None where no joint reached it
+    first_hinges: list[dict] = field(default_factory=list)
     #: the limit analysis's line of thrust: per ring, the points [m] where the resultant
     #: crosses each radial joint, springing to springing (empty without limit analysis)
     limit_thrust: list[list[tuple[float, float]]] = field(default_factory=list)
@@ -734,6 +748,10 @@ def assess(
     events: list[JointEvent] = []
     seen: set[tuple[int, str]] = set()  # (joint, kind) already in the sequence
     state: dict[str, Any] = {"open": [], "anchors": [], "fdem_thrust": []}
+    # the first hinge at each opening (``hinge_opening``'s is the sequence's first hinge)
+    first_hinges = [{"ratio": float(r), "opening": None, "step": None, "joint": None,
+                     "side": None, "s": None, "load": None, "displacement": None}
+                    for r in sorted({an.hinge_opening, *HINGE_OPENINGS})]
     thrust = JointThrust(case, model)
     anchor_peaks: dict[str, dict] = {}  # per anchor: its largest bar force over the run
 
@@ -749,7 +767,8 @@ def assess(
         return {"loads": loads, "disps": disps, "iters": iters, "events": events,
                 "seen": seen, "state": state, "anchor_peaks": anchor_peaks,
                 "snapshots": snapshots, "separation": separation, "best": best,
-                "monitor_base": monitor.base, "rings_base": rings.base, "u_sw": u_sw,
+                "first_hinges": first_hinges, "monitor_base": monitor.base,
+                "rings_base": rings.base, "u_sw": u_sw,
                 "open_at_collapse": open_at_collapse,
                 "anchors_at_collapse": anchors_at_collapse, "it0": it0, "la": la,
                 "elapsed": elapsed0 + time.perf_counter() - t_start}
@@ -760,7 +779,7 @@ def assess(
         it0, u_sw = r["it0"], r["u_sw"]
         monitor.base, rings.base = r["monitor_base"], r["rings_base"]
         for mine, theirs in ((loads, r["loads"]), (disps, r["disps"]), (iters, r["iters"]),
-                             (events, r["events"])):
+                             (events, r["events"]), (first_hinges, r["first_hinges"])):
             mine[:] = theirs
         for mine, theirs in ((state, r["state"]), (anchor_peaks, r["anchor_peaks"]),
                              (snapshots, r["snapshots"]), (separation, r["separation"]),
@@ -822,6 +841,17 @@ def assess(
                 seen.add((k, kind))
                 events.append(monitor.event(k, kind, side, len(events) + 1, load, disp,
                                             op[k]))
+        for fh in first_hinges:
+            if fh["step"] is not None:
+                continue
+            here = opened if fh["ratio"] == an.hinge_opening else monitor.classify(
+                fh["ratio"])[0]  # (collective, as the openings)
+            hinge = [(k, side) for k, kind, side in here if kind == "hinge"]
+            if hinge:
+                k, side = max(hinge, key=lambda x: op[x[0]].max())
+                e = monitor.event(k, "hinge", side, 0, load, disp, op[k])
+                fh.update(opening=float(op[k].max()), step=len(loads) - 1, joint=e.joint,
+                          side=side, s=e.s, load=float(load), displacement=float(disp))
         if "first hinge" not in snapshots and any(e.kind == "hinge" for e in events):
             snapshots["first hinge"] = (model.u.x.array.copy(), float(load), float(disp))
         if "peak load" not in snapshots or load > snapshots["peak load"][1]:
@@ -1016,7 +1046,8 @@ def assess(
         anchor_length=0.0 if anchors is None else anchors.total_length,
         anchor_peaks=list(anchor_peaks.values()),
         ring_separation=[separation[r] for r in sorted(separation)],
-        ring_separation_at_peak=list(state.get("separation_at_peak", [])))
+        ring_separation_at_peak=list(state.get("separation_at_peak", [])),
+        first_hinges=first_hinges)
     if vtx is not None:
         frame()
         vtx.close()

@@ -434,6 +434,20 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
                          f"{e.position[0]:.3f}, {e.position[1]:.3f} | {e.load / 1e3:.2f} |")
     else:
         lines.append("No joint opened beyond the threshold.")
+    if res.first_hinges:
+        lines += ["", "The first hinge depends on the opening counted as one: the sequence "
+                  f"above counts an end opened by {case.analysis.hinge_opening:g} × the ring "
+                  "thickness, its mortar cracked; the table gives the first hinge at wider "
+                  "openings too (1e-2: about a millimetre on a brick ring, a crack one "
+                  "sees):", "",
+                  "| opening / ring thickness | first hinge | opens at | s | load [kN] | "
+                  "of the peak load |", "|---|---|---|---|---|---|"]
+        for fh in res.first_hinges:
+            if fh["step"] is None:
+                lines.append(f"| {fh['ratio']:g} | none over the run | | | | |")
+                continue
+            lines.append(f"| {fh['ratio']:g} | {fh['joint']} | {fh['side']} | {fh['s']:.3f} | "
+                         f"{fh['load'] / 1e3:.2f} | {fh['load'] / res.peak_load:.2f} |")
     if disk_fill and any(e.load > res.peak_load for e in res.events):
         lines += ["", "(A load above the collapse load is the one under which the ring ran "
                   "on, with no equilibrium: those joints opened in the mechanism.)"
