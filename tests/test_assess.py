@@ -178,6 +178,8 @@ def test_the_first_hinge_is_counted_at_wider_openings_too(dry_runs):
     assert f"| 0.01 | {fh[-1]['joint']} | {fh[-1]['side']} |" in text
     assert json.loads((res.folder / "summary.json").read_text())["first_hinges"][-1][
         "step"] == steps[-1]
+    # the limit analysis's mechanism in words (its four hinges drawn in hinges.png)
+    assert "Limit analysis: a mechanism with 4 hinges." in text
 
 
 def test_dry_arch_fdem_thrust_line_touches_the_faces_at_its_hinges(dry_runs):

@@ -84,6 +84,10 @@ def test_single_block_sliding():
     assert res.status == LimitStatus.COLLAPSE
     assert res.load_factor == pytest.approx(μ * weight, rel=1e-6)  # 588.6
     assert [hg.kind for hg in res.hinges] == [HingeKind.SLIDING]
+    # an assessment draws and counts the rotations only (the sliding one in words)
+    from masonry_fdem.assessment.assess import limit_rotation_hinges
+
+    assert limit_rotation_hinges(res) == [] and "1 sliding interface" in res.explanation
     # associative friction: the block slides to +x and dilates by μ per unit slip
     u, v, ω = res.block_velocities[1]
     assert u > 0.0 and v == pytest.approx(μ * u, rel=1e-9) and abs(ω) < 1e-12

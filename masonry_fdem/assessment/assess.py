@@ -141,7 +141,9 @@ class Assessment:
             of the run, the mechanism's after a mechanism).
         limit_load: the limit-analysis collapse load (None if not run), ``limit_status``
             its LP status, ``limit_explanation`` its outcome in plain words and
-            ``limit_hinges`` its hinges (``(blocks, position)``).
+            ``limit_hinges`` its hinges (``(blocks, position)``; relative rotations
+            only: its sliding and separating interfaces are counted in
+            ``limit_explanation``).
         folder, report: the run folder and ``report.md`` (None if not written).
         cells, elapsed: the mesh size and the wall time [s].
         anchors: per anchor at the peak load (see :func:`anchor_state`); empty
@@ -330,6 +332,16 @@ def case_limit_analysis(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     if isinstance(la, Exception):
         raise la
     return la
+
+
+def limit_rotation_hinges(la) -> list[tuple[tuple[str, str], tuple[float, float]]]:
+    """``(blocks, position)`` of the limit analysis's hinges (relative rotation about one
+    end); its sliding and separating interfaces left out (empty without an LP)."""
+    from masonry_fdem.solvers.limit_analysis import HingeKind
+
+    if la is None:
+        return []
+    return [(h.blocks, h.position) for h in la.hinges if h.kind == HingeKind.HINGE]
 
 
 def limit_load_of(la) -> float | None:
@@ -1039,7 +1051,7 @@ def assess(
         events=events, hinges_at_collapse=hinges_now, limit_load=limit_load,
         limit_status=None if la is None else str(la.status),
         limit_explanation="" if la is None else la.explanation,
-        limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
+        limit_hinges=limit_rotation_hinges(la),
         limit_thrust=[] if la is None else thrust_lines(case, la),
         fdem_thrust=state["fdem_thrust"],
         cells=int(model.blocks.n_cells), anchors=anchors_at_collapse,

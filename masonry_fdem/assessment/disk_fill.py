@@ -586,7 +586,8 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
         ValueError: the case has anchors (not modelled with a disk fill).
     """
     from masonry_fdem.assessment.assess import (Assessment, _JointMonitor, case_limit_analysis,
-                                                limit_load_of, progress_bar)
+                                                limit_load_of, limit_rotation_hinges,
+                                                progress_bar)
     from masonry_fdem.assessment.report import thrust_lines, write_run_folder
     from masonry_fdem.assessment.specs import DiskFillSpec
     from masonry_fdem.io.checkpoint import Interrupted, rearm, stop_requested
@@ -668,7 +669,7 @@ def assess_disk_fill(case, *, folder, write: bool = True, progress=None,
         events=events, hinges_at_collapse=at_end, limit_load=limit_load,
         limit_status=None if la is None else str(la.status),
         limit_explanation="" if la is None else la.explanation,
-        limit_hinges=[] if la is None else [(h.blocks, h.position) for h in la.hinges],
+        limit_hinges=limit_rotation_hinges(la),
         limit_thrust=[] if la is None else thrust_lines(case, la),
         cells=int(b.model.blocks.n_cells))
     res.elapsed = time.perf_counter() - t_start

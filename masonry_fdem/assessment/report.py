@@ -457,7 +457,7 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
     when = ("at the peak load" if not disk_fill else "at the end of the run (the mechanism)"
             if res.status.status is Status.MECHANISM else "at the end of the run")
     lines += ["", f"Open {when}: {len(res.hinges_at_collapse)} joint(s). "
-              f"Limit-analysis hinges: {len(res.limit_hinges)}.", "",
+              f"Limit analysis: {_limit_motion(res)}.", "",
               "![hinges](hinges.png)", "",
               f"## Mechanism (displacements ×{mag:.0f})", "", "![mechanism](mechanism.png)",
               *[x for name, file, load, disp in drawn for x in (
@@ -469,6 +469,15 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
                  f"{case.analysis.paraview_every} increments and the last)"
                  if paraview else "") + ".", ""]
     return "\n".join(lines)
+
+
+def _limit_motion(res) -> str:
+    """The limit analysis's mechanism in words, e.g. "a mechanism with 4 hinges" (its
+    hinges drawn in ``hinges.png``; sliding interfaces counted, not drawn)."""
+    if res.limit_status != "collapse":
+        return res.limit_status or "not run"
+    words = res.limit_explanation.split(" by ", 1)
+    return words[1] if len(words) == 2 else f"{len(res.limit_hinges)} hinges"
 
 
 def anchor_peaks_table(peaks: list[dict]) -> list[str]:

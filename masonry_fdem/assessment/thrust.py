@@ -202,7 +202,10 @@ class JointThrust:
     def lines(self, interactions) -> list[list[tuple[float, float]]]:
         """Per ring, the point [m] where the resultant of the forces across each radial
         joint crosses it (springing to springing, reference configuration); joints
-        without compression are left out (collective)."""
+        without compression are left out, and so are those whose resultant crosses the
+        joint's line more than the joint's length beyond its ends: a small thrust against
+        the bending that the mortar's bond carries there, no point of a line of thrust (on
+        the TRL arch's rings up to 2 m away, drawn across the figure) (collective)."""
         if not self.rows:
             return []
         res = block_pair_resultants(interactions, self.pairs)
@@ -211,6 +214,9 @@ class JointThrust:
             cross = d[0] * fy - d[1] * fx
             if not (fx * n[0] + fy * n[1] > 0.0 and abs(cross) > 0.0):
                 continue  # no compression across the joint
-            p = p0 + (mz - (p0[0] * fy - p0[1] * fx)) / cross * d
+            t = (mz - (p0[0] * fy - p0[1] * fx)) / cross
+            if not -1.0 <= t <= 2.0:
+                continue  # far outside the joint: the bond's bending, not a thrust
+            p = p0 + t * d
             rings.setdefault(ring, []).append((j, (float(p[0]), float(p[1]))))
         return [[p for _, p in sorted(r)] for _, r in sorted(rings.items())]
