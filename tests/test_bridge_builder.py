@@ -392,3 +392,37 @@ def test_backing_over_the_abutments_and_the_pier():
 
     with pytest.raises(BridgeError, match="backing is modelled with a continuum fill only"):
         DiskBridge(two_span(backing=0.25), mats, MORTAR, ITF)
+
+
+def test_the_single_span_settles_by_newton_where_the_critical_point_search_cycles():
+    """The 6 m single span of ``cases/bridge_single_span_spandrels.toml`` without its walls
+    (a 1 m strip), its fill's interfaces held stuck, under its dead loads from zero: dry
+    ring joints start at their kink, and Newton with the critical-point line search
+    cycles at every fraction of the loads (before, settling fell back on dynamic
+    relaxation). ``settle`` tries a failed increment again with the backtracking line
+    search and reaches the full dead loads by Newton; the supports then carry the
+    bridge's weight, and the solver is back on its own line search."""
+    import tomllib
+
+    from masonry_fdem.solvers.static import StaticSolver
+    from masonry_fdem.solvers.status import Status
+
+    data = tomllib.loads((ROOT / "cases" / "bridge_single_span_spandrels.toml").read_text())
+    br = data["bridge"]
+    br.update(width=1.0, spandrel_thickness=0.0)
+    del br["spandrel_block"], br["materials"]["spandrel"], data["joints"]["spandrel"]
+    case = load_bridge_case(data, name="strip")
+    model, inter, _ = bridge_model(case.bridge, case.materials, case.mortar, case.interface,
+                                   case.vehicle, 1.8, mesh_size=case.mesh, comm=MPI.COMM_SELF)
+    solver = StaticSolver(model, interactions=inter, rtol=1e-6)
+    inter[1].set_friction(case.interface, max(10.0, 4.0 * case.interface.tan_phi))
+    st = solver.settle()
+    runs = [(r.converged, r.iterations, r.reason) for r in solver.results]
+    weight = model.total_mass() * 9.81
+    ry = sum(r[1] for r in solver.reactions().values())
+    print(f"\nsettle: {st.detail}; solves {runs}; reactions {ry / 1e3:.3f} kN, weight "
+          f"{weight / 1e3:.3f} kN")
+    assert st.status is Status.LOAD_REACHED and solver.dead_factor == 1.0
+    assert not runs[0][0] and runs[1][0]  # the first increment: cp failed, bt converged
+    assert ry == pytest.approx(weight, rel=5e-4)
+    assert solver.snes.getLineSearch().getType() == "cp"

@@ -286,6 +286,8 @@ def _settle(solver, joints, case: ArchCase) -> RunStatus:
             f = max(mu, 0.5 * f)
             joints.set_friction(jf, f)
             r = solver.solve(solver.load_factor)
+            if not r.converged:  # (as settle does where the critical-point search cycles)
+                r = solver.solve(solver.load_factor, line_search="bt")
             if not r.converged:
                 return f, r.reason
         return f, None

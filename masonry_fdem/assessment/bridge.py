@@ -475,6 +475,8 @@ def load_bridge(
         f = max(mu, 0.5 * f)
         joints.set_friction(interface, f)
         r = solver.solve(solver.load_factor)
+        if not r.converged:  # (where the critical-point line search cycles, as in settle)
+            r = solver.solve(solver.load_factor, line_search="bt")
         if r.converged:
             solver.commit()
         else:
