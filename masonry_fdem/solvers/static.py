@@ -614,8 +614,8 @@ class StaticSolver:
         line search (``bt``: a step is shortened until ‖r‖ falls), and the rest of the
         settle keeps it. Dry joints start at their kink between closed and open, at any
         fraction of the dead loads; there ``cp``'s secant steps can cycle where ``bt``'s
-        do not (the two-span bridge without walls: ``cp`` failed at every fraction from
-        1/8 to 1/256; ``bt`` settled it in seven increments, one second).
+        do not (the bridge builder's 6 m single span without walls: ``cp`` failed at every
+        fraction from 1/8 to 1/256; ``bt`` settled it in seven increments, one second).
 
         Returns:
             *load reached* with the dead loads in full, or *not converged* at the dead-
