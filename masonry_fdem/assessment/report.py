@@ -441,7 +441,8 @@ def _report(case, res, mag: float, drawn=(), paraview=()) -> str:
                   "openings too (1e-2: about a millimetre on a brick ring, a crack one "
                   "sees):", "",
                   "| opening / ring thickness | first hinge | opens at | s | load [kN] | "
-                  "of the peak load |", "|---|---|---|---|---|---|"]
+                  + ("of the collapse load |" if res.collapsed
+                     else "of the largest load carried |"), "|---|---|---|---|---|---|"]
         for fh in res.first_hinges:
             if fh["step"] is None:
                 lines.append(f"| {fh['ratio']:g} | none over the run | | | | |")
