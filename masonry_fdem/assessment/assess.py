@@ -57,7 +57,7 @@ import logging
 import math
 import shutil
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -285,9 +285,7 @@ def _settle(solver, joints, case: ArchCase) -> RunStatus:
         while f > mu:
             f = max(mu, 0.5 * f)
             joints.set_friction(jf, f)
-            r = solver.solve(solver.load_factor)
-            if not r.converged:  # (as settle does where the critical-point search cycles)
-                r = solver.solve(solver.load_factor, line_search="bt")
+            r = solver.solve_retrying(solver.load_factor)
             if not r.converged:
                 return f, r.reason
         return f, None
@@ -512,11 +510,17 @@ class _JointMonitor(_InterfaceOpenings):
         """``(row, kind, side)`` of the joints that are hinges, separated or crushed (see
         the module doc: an end opened by more than ``ratio`` × the joint's length, its
         mortar cracked through), and the openings [m]."""
+        outs, op = self.classify_at((ratio,))
+        return outs[0], op
+
+    def classify_at(self, ratios: Sequence[float]
+                    ) -> tuple[list[list[tuple[int, str, str]]], np.ndarray]:
+        """:meth:`classify` at each of ``ratios`` from one evaluation of the openings and
+        the mortar's states (collective): the lists, and the openings [m]."""
         from masonry_fdem.interactions.joints.joints import JOINT_STATES
 
-        out = []
         op = self.openings()
-        opened = op > ratio * self.length[:, None]
+        intact = np.zeros(op.shape, dtype=bool)  # ends whose mortar has not cracked
         crushed = np.zeros(op.shape, dtype=bool)
         if self.joints is not None and self.joints.n_segments:
             st = self.joints.point_status()  # collective
@@ -527,18 +531,25 @@ class _JointMonitor(_InterfaceOpenings):
             cracked = (st >= JOINT_STATES.index("softening")) & (
                 st != JOINT_STATES.index("crushed"))
             cracked |= np.repeat(self.joints.released, 2)
-            opened &= ~has | cracked[pt]
+            intact = has & ~cracked[pt]
             crushed = has & (st[pt] == JOINT_STATES.index("crushed"))
-        for k in range(len(self.rows)):
-            if opened[k].all():
-                out.append((k, "separation", ""))
-            elif opened[k].any():
-                end = int(np.argmax(np.where(opened[k], op[k], -np.inf)))
-                out.append((k, "hinge", "intrados" if end == self.side[k] else "extrados"))
-            elif crushed[k].any():
-                end = int(np.argmax(crushed[k]))
-                out.append((k, "crushed", "intrados" if end == self.side[k] else "extrados"))
-        return out, op
+        outs = []
+        for ratio in ratios:
+            opened = (op > ratio * self.length[:, None]) & ~intact
+            out = []
+            for k in range(len(self.rows)):
+                if opened[k].all():
+                    out.append((k, "separation", ""))
+                elif opened[k].any():
+                    end = int(np.argmax(np.where(opened[k], op[k], -np.inf)))
+                    out.append((k, "hinge", "intrados" if end == self.side[k]
+                                else "extrados"))
+                elif crushed[k].any():
+                    end = int(np.argmax(crushed[k]))
+                    out.append((k, "crushed", "intrados" if end == self.side[k]
+                                else "extrados"))
+            outs.append(out)
+        return outs, op
 
     def event(self, k: int, kind: str, side: str, order: int, load: float,
               disp: float, opening: np.ndarray) -> JointEvent:
@@ -830,7 +841,11 @@ def assess(
         loads.append(float(load))
         disps.append(float(disp))
         iters.append(int(iterations))
-        opened, op = monitor.classify(an.hinge_opening)
+        # the case's opening, and the wider ones whose first hinge is still to come
+        wider = [fh for fh in first_hinges
+                 if fh["step"] is None and fh["ratio"] != an.hinge_opening]
+        outs, op = monitor.classify_at([an.hinge_opening] + [fh["ratio"] for fh in wider])
+        opened = outs[0]
         state["open"] = [(k, kind, side, load, disp, op[k]) for k, kind, side in opened]
         layers = rings.layers()
         for lay in layers:
@@ -855,11 +870,10 @@ def assess(
                 seen.add((k, kind))
                 events.append(monitor.event(k, kind, side, len(events) + 1, load, disp,
                                             op[k]))
-        for fh in first_hinges:
+        own = next(fh for fh in first_hinges if fh["ratio"] == an.hinge_opening)
+        for fh, here in zip([own, *wider], outs, strict=True):
             if fh["step"] is not None:
                 continue
-            here = opened if fh["ratio"] == an.hinge_opening else monitor.classify(
-                fh["ratio"])[0]  # (collective, as the openings)
             hinge = [(k, side) for k, kind, side in here if kind == "hinge"]
             if hinge:
                 k, side = max(hinge, key=lambda x: op[x[0]].max())

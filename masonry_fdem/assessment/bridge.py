@@ -474,9 +474,7 @@ def load_bridge(
     while st.status is Status.LOAD_REACHED and f > mu:
         f = max(mu, 0.5 * f)
         joints.set_friction(interface, f)
-        r = solver.solve(solver.load_factor)
-        if not r.converged:  # (where the critical-point line search cycles, as in settle)
-            r = solver.solve(solver.load_factor, line_search="bt")
+        r = solver.solve_retrying(solver.load_factor)
         if r.converged:
             solver.commit()
         else:

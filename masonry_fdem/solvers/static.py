@@ -489,6 +489,14 @@ class StaticSolver:
                      res.relative_residual, res.reason)
         return res
 
+    def solve_retrying(self, load_factor: float = 1.0) -> NewtonResult:
+        """:meth:`solve`, and where it fails with the options' line search (if not
+        ``bt`` already) once more with the backtracking one, as :meth:`settle` does."""
+        res = self.solve(load_factor)
+        if res.converged or self.snes.getLineSearch().getType() == "bt":
+            return res
+        return self.solve(load_factor, line_search="bt")
+
     def _make_snes(self) -> None:
         """A new SNES (and its KSP and line search) on the solver's options. Made again
         after a failed solve: the critical-point line search keeps the norms of the last
