@@ -257,6 +257,46 @@ def test_cohesionless_interface_opens_as_a_gap_and_closes_where_it_parted():
     assert abs(ts) == pytest.approx(-sn * tan_phi, rel=1e-9)
 
 
+def test_a_spent_mortar_point_opens_as_a_gap_and_closes_where_its_bond_was_spent():
+    """A mortar point (f_t 0.25 MPa, G_fI 18 N/m: the TRL case's) opened in tension until
+    its committed softening factor is below R_SPENT = 1e-3 then opens as a gap: opened
+    further and closed halfway back it carries nothing (with the plastic opening of the
+    tension cut-off it was pressed at once: σ = −k_n × the closure, 8.2 MPa for 1 mm);
+    closed past where the bond was spent it carries −k_n × the overlap. Before it is
+    spent the tension cut-off still holds the softened strength f_t R. Under IMEX a
+    point spent at its committed state gets no strength for the increment."""
+    from masonry_fdem.interactions.joints import _kernels as JK
+    kn, ks, ft, gf = 82e9, 36e9, 0.25e6, 18.0
+    p = np.zeros(JK.N_PROPS)
+    p[JK.P_KN], p[JK.P_KS], p[JK.P_TANPHI] = kn, ks, 0.75
+    p[JK.P_FT], p[JK.P_GF1], p[JK.P_C], p[JK.P_GF2] = ft, gf, 0.35e6, 125.0
+    s0, s1 = JK.empty_state(1)[0], JK.empty_state(1)[0]
+
+    def step(dn, commit=True):
+        JK.interface_law(p, dn, 0.0, s0, s1)
+        if commit:
+            s0[:] = s1
+        return s1[JK.S_SN]
+
+    k_spent = -np.log(JK.R_SPENT) * gf / ft  # κ1 where R reaches R_SPENT (0.50 mm)
+    sn = step(0.5 * k_spent)  # softening, not spent: σ = f_t R
+    assert sn == pytest.approx(ft * np.exp(-ft * s0[JK.S_K1] / gf), rel=1e-9)
+    assert sn > 10 * JK.R_SPENT * ft
+    step(1.01 * k_spent)  # spent now
+    dnp = s0[JK.S_DNP]
+    assert JK.softening_factor(p, s0[JK.S_K1], s0[JK.S_K2]) <= JK.R_SPENT
+    assert step(2e-3) == 0.0  # opened on: a gap, the plastic opening stays
+    assert s0[JK.S_DNP] == dnp and s0[JK.S_STATUS] == JK.OPEN
+    assert step(1e-3) == 0.0  # closed halfway: still a gap
+    assert step(dnp - 1e-6) == pytest.approx(-kn * 1e-6, rel=1e-6)  # closed past: pressed
+    # IMEX: the increment's strengths are zero for a point spent at its committed state
+    props = p[None, :].copy()
+    out = np.zeros_like(props)
+    JK.explicit_softening_props(props, np.zeros(1, np.int64), s0[None, :].copy(),
+                  np.c_[s0[None, [JK.S_K1, JK.S_K2, JK.S_K3]]], 1.0, out)
+    assert out[0, JK.P_FT] == 0.0 and out[0, JK.P_C] == 0.0
+
+
 def _fragments(gap=0.05, comm=MPI.COMM_WORLD):
     """Two square units, each cut along its diagonal into two triangles rejoined by a
     crack law, ``gap`` [m] apart: a and b; no gravity, no support."""

@@ -17,7 +17,10 @@ stiffnesses in Pa/m, fracture energies in J/m² = N/m):
   (Δn ≥ Δn_p) they carry nothing and the opening is a gap, not plastic: they close again
   where they parted, and the tangential spring is relaxed while open (Δs_p follows Δs).
   (A plastic opening, as the tension cut-off returns, would put every open point exactly
-  on the kink between contact and separation at every committed state.)
+  on the kink between contact and separation at every committed state.) So does a
+  non-dilatant joint with strength once its bond is *spent*: its committed softening
+  factor at or below ``R_SPENT`` (1e-3, 0.1 % of f_t and c left; κ1 ≈ 6.9 G_fI/f_t);
+  pressed again it takes the law with the strengths left;
 * dilatancy tan ψ = tan ψ0 · ⟨1 − σ/σ_u⟩ · exp(−δ κ2): it vanishes under the confining
   stress σ_u < 0 and decays with slip;
 * cap hardening/softening (Lourenço's three branches): σ̄_c = f_c/3 → f_c at κ3 = κ_p
@@ -75,6 +78,9 @@ N_STATE = 11
 # status codes
 INTACT, SOFTENING, OPEN, SLIDING, CRUSHED = 0, 1, 2, 3, 4
 BROKEN_R = 1e-2  # softening factor below which a joint counts as broken
+#: softening factor at or below which a point's bond is spent (0.1 % of its strengths
+#: left): from then on it opens as a gap, as a cohesionless joint does (see interface_law)
+R_SPENT = 1e-3
 
 # energies returned
 E_ELASTIC, E_DISSIPATED = 0, 1
@@ -262,15 +268,20 @@ def interface_law(p, dn, ds, s0, s1):
     k2 = s0[S_K2]
     k3 = s0[S_K3]
     diss = s0[S_DISS]
-    if p[P_FT] == 0.0 and p[P_C] == 0.0 and dn - dnp >= 0.0:
-        # cohesionless and not pressed (a sand layer, a dry joint): a gap, not a plastic
-        # opening. The faces carry nothing and close where they parted (dn = dnp), and
-        # the tangential spring is relaxed (dsp follows ds), so the point recloses
-        # without a stale shear. A plastic opening (dnp = dn, as the tension cut-off of
-        # a joint with strength returns) would leave every open point exactly on the
-        # kink between contact and separation at every committed state — Newton then
-        # toggles such points from one iteration to the next — and would press a
-        # reopened joint at once on any reversal of its opening.
+    if dn - dnp >= 0.0 and ((p[P_FT] == 0.0 and p[P_C] == 0.0)
+                            or (p[P_TANPSI] == 0.0 and softening_factor(p, k1, k2) <= R_SPENT)):
+        # cohesionless (a sand layer, a dry joint) or spent (a cracked mortar joint
+        # whose committed softening has left at most R_SPENT of its strengths; not a
+        # dilatant one, whose opening under slip is its flow rule's) and not pressed: a
+        # gap, not a plastic opening. The faces carry nothing and close where
+        # they parted (dn = dnp), and the tangential spring is relaxed (dsp follows ds),
+        # so the point recloses without a stale shear. A plastic opening (dnp = dn, as
+        # the tension cut-off of a joint with strength returns) would leave every open
+        # point exactly on the kink between contact and separation at every committed
+        # state — Newton then toggles such points from one iteration to the next (the
+        # full TRL arch's hinges, 80 mm into its mechanism) — and would press a reopened
+        # joint at once on any reversal of its opening. (A spent point gives up at most
+        # R_SPENT f_t of tension on becoming a gap; pressed, it takes the law below.)
         s1[S_DNP] = dnp
         s1[S_DSP] = ds
         s1[S_K1] = k1
@@ -620,7 +631,8 @@ def _branch(s0q, s1q):
 def hand_over_flags(X, u, ipa, ipb, ipmat, props, s0, seg, seg_length, release_ratio,
                     release_cos, done, turned):
     """Per segment (``seg[q]`` the local segment of point q): ``done`` the number of its
-    points spent — open with a softening factor at or below ``release_ratio``, or slid by
+    points spent — open with a softening factor at or below ``release_ratio`` (or
+    ``R_SPENT``, where the law opens it as a gap), or slid by
     more than half the segment's length [m] — and ``turned`` whether a point's facets have
     turned against each other beyond ``release_cos`` (B's facet reversed: parallel when
     bonded). Both are zeroed first."""
@@ -629,7 +641,8 @@ def hand_over_flags(X, u, ipa, ipb, ipmat, props, s0, seg, seg_length, release_r
     for q in range(ipa.shape[0]):
         p = props[ipmat[q]]
         r = softening_factor(p, s0[q, S_K1], s0[q, S_K2])
-        if ((s0[q, S_STATUS] == OPEN and r <= release_ratio)
+        spent = r <= release_ratio or (p[P_TANPSI] == 0.0 and r <= R_SPENT)
+        if ((s0[q, S_STATUS] == OPEN and spent)
                 or abs(s0[q, S_DS]) > 0.5 * seg_length[seg[q]]):
             done[seg[q]] += 1
         a0 = ipa[q, 0]
@@ -684,8 +697,12 @@ def explicit_softening_props(props, ipmat, s0, kprev, rho, out):
         k2 = s0[q, S_K2] + rho * max(s0[q, S_K2] - kprev[q, 1], 0.0)
         k3 = s0[q, S_K3] + rho * max(s0[q, S_K3] - kprev[q, 2], 0.0)
         if p[P_FT] > 0.0 or p[P_C] > 0.0:
-            # (never exactly 0: a spent joint stays a plastic opening, not a gap)
-            r = max(softening_factor(p, k1, k2), 1e-200)
+            # a point spent at its committed state (interface_law) has no strength left
+            # in the increment: it opens as a gap; else the extrapolated strengths
+            # (never exactly 0 then)
+            r = (0.0 if p[P_TANPSI] == 0.0
+                 and softening_factor(p, s0[q, S_K1], s0[q, S_K2]) <= R_SPENT
+                 else max(softening_factor(p, k1, k2), 1e-200))
             out[q, P_FT] = p[P_FT] * r
             out[q, P_C] = p[P_C] * r
         out[q, P_GF1] = math.inf
