@@ -102,6 +102,13 @@ def softening_factor(p, k1, k2):
 
 
 @njit(cache=True, inline="always")
+def is_spent(p, r):
+    """Whether a point of softening factor ``r`` has its bond spent: a non-dilatant joint
+    with at most ``R_SPENT`` of its strengths left (it then opens as a gap)."""
+    return p[P_TANPSI] == 0.0 and r <= R_SPENT
+
+
+@njit(cache=True, inline="always")
 def cap_strength(p, k3):
     """σ̄_c(κ3) [Pa]: hardening to f_c at κ_p, then softening to f_c/7."""
     fc = p[P_FC]
@@ -269,7 +276,7 @@ def interface_law(p, dn, ds, s0, s1):
     k3 = s0[S_K3]
     diss = s0[S_DISS]
     if dn - dnp >= 0.0 and ((p[P_FT] == 0.0 and p[P_C] == 0.0)
-                            or (p[P_TANPSI] == 0.0 and softening_factor(p, k1, k2) <= R_SPENT)):
+                            or is_spent(p, softening_factor(p, k1, k2))):
         # cohesionless (a sand layer, a dry joint) or spent (a cracked mortar joint
         # whose committed softening has left at most R_SPENT of its strengths; not a
         # dilatant one, whose opening under slip is its flow rule's) and not pressed: a
@@ -641,8 +648,7 @@ def hand_over_flags(X, u, ipa, ipb, ipmat, props, s0, seg, seg_length, release_r
     for q in range(ipa.shape[0]):
         p = props[ipmat[q]]
         r = softening_factor(p, s0[q, S_K1], s0[q, S_K2])
-        spent = r <= release_ratio or (p[P_TANPSI] == 0.0 and r <= R_SPENT)
-        if ((s0[q, S_STATUS] == OPEN and spent)
+        if ((s0[q, S_STATUS] == OPEN and (r <= release_ratio or is_spent(p, r)))
                 or abs(s0[q, S_DS]) > 0.5 * seg_length[seg[q]]):
             done[seg[q]] += 1
         a0 = ipa[q, 0]
@@ -700,8 +706,7 @@ def explicit_softening_props(props, ipmat, s0, kprev, rho, out):
             # a point spent at its committed state (interface_law) has no strength left
             # in the increment: it opens as a gap; else the extrapolated strengths
             # (never exactly 0 then)
-            r = (0.0 if p[P_TANPSI] == 0.0
-                 and softening_factor(p, s0[q, S_K1], s0[q, S_K2]) <= R_SPENT
+            r = (0.0 if is_spent(p, softening_factor(p, s0[q, S_K1], s0[q, S_K2]))
                  else max(softening_factor(p, k1, k2), 1e-200))
             out[q, P_FT] = p[P_FT] * r
             out[q, P_C] = p[P_C] * r
