@@ -257,14 +257,17 @@ def test_cohesionless_interface_opens_as_a_gap_and_closes_where_it_parted():
     assert abs(ts) == pytest.approx(-sn * tan_phi, rel=1e-9)
 
 
-def test_a_spent_mortar_point_opens_as_a_gap_and_closes_where_its_bond_was_spent():
+def test_a_spent_mortar_point_opens_as_a_gap_and_closes_where_its_faces_meet():
     """A mortar point (f_t 0.25 MPa, G_fI 18 N/m: the TRL case's) opened in tension until
-    its committed softening factor is below R_SPENT = 1e-3 then opens as a gap: opened
-    further and closed halfway back it carries nothing (with the plastic opening of the
-    tension cut-off it was pressed at once: σ = −k_n × the closure, 8.2 MPa for 1 mm);
-    closed past where the bond was spent it carries −k_n × the overlap. Before it is
-    spent the tension cut-off still holds the softened strength f_t R. Under IMEX a
-    point spent at its committed state gets no strength for the increment."""
+    its committed softening factor is below R_SPENT = 1e-3 then opens as a gap, a crack:
+    opened further and closed halfway back it carries nothing (with the plastic opening of
+    the tension cut-off it was pressed at once: σ = −k_n × the closure, 8.2 MPa for 1 mm);
+    closed back past where its bond was spent (0.5 mm open) it still carries nothing, its
+    faces being apart; closed past where they meet (dn = 0, as the block contact that
+    takes a broken joint over has them) it carries −k_n × the overlap, and opens again
+    there. Before it is spent the tension cut-off still holds the softened strength
+    f_t R. Under IMEX a point spent at its committed state gets no strength for the
+    increment."""
     from masonry_fdem.interactions.joints import _kernels as JK
     kn, ks, ft, gf = 82e9, 36e9, 0.25e6, 18.0
     p = np.zeros(JK.N_PROPS)
@@ -288,7 +291,11 @@ def test_a_spent_mortar_point_opens_as_a_gap_and_closes_where_its_bond_was_spent
     assert step(2e-3) == 0.0  # opened on: a gap, the plastic opening stays
     assert s0[JK.S_DNP] == dnp and s0[JK.S_STATUS] == JK.OPEN
     assert step(1e-3) == 0.0  # closed halfway: still a gap
-    assert step(dnp - 1e-6) == pytest.approx(-kn * 1e-6, rel=1e-6)  # closed past: pressed
+    assert step(dnp - 1e-6) == 0.0  # past where the bond was spent: the faces still apart
+    assert step(1e-6) == 0.0
+    assert step(-1e-6) == pytest.approx(-kn * 1e-6, rel=1e-6)  # faces met: pressed
+    assert s0[JK.S_DNP] == dnp  # (the crack's opening kept, for the next opening)
+    assert step(1e-6) == 0.0  # reopened where the faces met
     # IMEX: the increment's strengths are zero for a point spent at its committed state
     props = p[None, :].copy()
     out = np.zeros_like(props)

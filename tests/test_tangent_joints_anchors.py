@@ -236,8 +236,9 @@ def _joint_case(case: str):
         d0 = 30.0 * GfI / ft  # R = e^-30: tension and cohesion are gone
         pr.commit(pr.dofs(joint_field(bx, 0.0, d0)))
         assert np.all(s0[:, JK.S_STATUS] == JK.OPEN)
-        # rock about x = 0.07 m: open beyond it, closed (compressed, sticking) before
-        x = pr.dofs(joint_field(bx, 0.0, d0, rot=2e-4))
+        # closed back and rocking about x = 0.07 m: open beyond it, closed (compressed,
+        # sticking) before — a spent crack's faces meet where they met before it opened
+        x = pr.dofs(joint_field(bx, 0.0, 0.0, rot=2e-4))
 
         def check(j):
             st = j.s1[:, JK.S_STATUS]

@@ -19,8 +19,10 @@ stiffnesses in Pa/m, fracture energies in J/m² = N/m):
   (A plastic opening, as the tension cut-off returns, would put every open point exactly
   on the kink between contact and separation at every committed state.) So does a
   non-dilatant joint with strength once its bond is *spent*: its committed softening
-  factor at or below ``R_SPENT`` (1e-3, 0.1 % of f_t and c left; κ1 ≈ 6.9 G_fI/f_t);
-  pressed again it takes the law with the strengths left;
+  factor at or below ``R_SPENT`` (1e-3, 0.1 % of f_t and c left; κ1 ≈ 6.9 G_fI/f_t).
+  Its faces, a crack's, meet where they met before the crack opened: at Δn = Δn_p − κ1
+  (κ1 being the tension cut-off's share of Δn_p), as the block contact that takes a
+  broken joint over has them; pressed there it takes the law with the strengths left;
 * dilatancy tan ψ = tan ψ0 · ⟨1 − σ/σ_u⟩ · exp(−δ κ2): it vanishes under the confining
   stress σ_u < 0 and decays with slip;
 * cap hardening/softening (Lourenço's three branches): σ̄_c = f_c/3 → f_c at κ3 = κ_p
@@ -275,13 +277,19 @@ def interface_law(p, dn, ds, s0, s1):
     k2 = s0[S_K2]
     k3 = s0[S_K3]
     diss = s0[S_DISS]
-    if dn - dnp >= 0.0 and ((p[P_FT] == 0.0 and p[P_C] == 0.0)
-                            or is_spent(p, softening_factor(p, k1, k2))):
+    gap = (p[P_FT] == 0.0 and p[P_C] == 0.0) or is_spent(p, softening_factor(p, k1, k2))
+    crack = k1 if gap else 0.0
+    if gap and dn - (dnp - crack) >= 0.0:
         # cohesionless (a sand layer, a dry joint) or spent (a cracked mortar joint
         # whose committed softening has left at most R_SPENT of its strengths; not a
         # dilatant one, whose opening under slip is its flow rule's) and not pressed: a
-        # gap, not a plastic opening. The faces carry nothing and close where
-        # they parted (dn = dnp), and the tangential spring is relaxed (dsp follows ds),
+        # gap, not a plastic opening. The faces carry nothing and close where they
+        # met before the gap opened: at dn = dnp for a cohesionless point, at
+        # dn = dnp − κ1 for a spent one, whose tension cut-off's plastic opening κ1 is
+        # its crack's width (closing a crack 0.8 mm open to 0.7 mm pressed it with
+        # k_n × 0.1 mm = 8.2 MPa on the TRL mortar while its faces were still apart,
+        # where the block contact that takes a broken joint over finds them first at
+        # dn = 0). The tangential spring is relaxed (dsp follows ds),
         # so the point recloses without a stale shear. A plastic opening (dnp = dn, as
         # the tension cut-off of a joint with strength returns) would leave every open
         # point exactly on the kink between contact and separation at every committed
@@ -301,6 +309,7 @@ def interface_law(p, dn, ds, s0, s1):
         s1[S_DN] = dn
         s1[S_DS] = ds
         return
+    dnp -= crack  # (a spent point pressed: the law from where its faces meet)
     slid = False
     for _ in range(6):
         active = False
@@ -359,7 +368,7 @@ def interface_law(p, dn, ds, s0, s1):
         status = INTACT
     if slid and status < SOFTENING:
         status = SOFTENING
-    s1[S_DNP] = dnp
+    s1[S_DNP] = dnp + crack
     s1[S_DSP] = dsp
     s1[S_K1] = k1
     s1[S_K2] = k2
