@@ -40,7 +40,7 @@ demo: precompile
 
 # the TRL three-ring arch with its fill, unstrengthened and anchored, one rank each
 # (issue #21; under 9 minutes on 2 cores; unstrengthened *peak passed* 64.29 kN, anchored
-# *not converged* at 81.0 mm with 102.64 kN carried: docs/trl.md)
+# *not converged* at 81.2 mm with 102.64 kN carried: docs/trl.md)
 demo-trl: precompile
 	$(MPIRUN) -n $(NP) $(PY) demos/trl_arch.py --out out_trl
 
