@@ -277,7 +277,8 @@ def interface_law(p, dn, ds, s0, s1):
     k2 = s0[S_K2]
     k3 = s0[S_K3]
     diss = s0[S_DISS]
-    gap = (p[P_FT] == 0.0 and p[P_C] == 0.0) or is_spent(p, softening_factor(p, k1, k2))
+    r = softening_factor(p, k1, k2)  # (kept current as κ1, κ2 change below)
+    gap = (p[P_FT] == 0.0 and p[P_C] == 0.0) or is_spent(p, r)
     crack = k1 if gap else 0.0
     if gap and dn - (dnp - crack) >= 0.0:
         # cohesionless (a sand layer, a dry joint) or spent (a cracked mortar joint
@@ -316,7 +317,6 @@ def interface_law(p, dn, ds, s0, s1):
         sn = kn * (dn - dnp)
         ts = ks * (ds - dsp)
         # --- tension cut-off and Coulomb friction (with their corner)
-        r = softening_factor(p, k1, k2)
         at = abs(ts)
         f1 = sn - p[P_FT] * r
         f2 = at + sn * p[P_TANPHI] - p[P_C] * r
@@ -333,6 +333,7 @@ def interface_law(p, dn, ds, s0, s1):
             dsp += sg * l2
             k1 += l1
             k2 += l2
+            r = softening_factor(p, k1, k2)
             sn = kn * (dn - dnp)
             ts = ks * (ds - dsp)
             diss += sn * (l1 + tpsi * l2) + abs(ts) * l2
@@ -357,7 +358,6 @@ def interface_law(p, dn, ds, s0, s1):
                 active = True
         if not active:
             break
-    r = softening_factor(p, k1, k2)
     if p[P_FC] > 0.0 and k3 > p[P_KP]:
         status = CRUSHED
     elif r <= BROKEN_R or (p[P_FT] == 0.0 and p[P_C] == 0.0):
