@@ -176,6 +176,46 @@ def test_contact_tangent_in_stick_and_in_slip(push, friction, sliding):
         assert asym > 1e-3
 
 
+def test_contact_tangent_holds_the_friction_branch_at_the_coulomb_limit():
+    """A contact that slides, or sticks, closer to the Coulomb limit than the tangent's
+    finite-difference step reaches (ε_t h, h = 1e-10 of a facet) gets the tangent of its
+    own branch, not the mean of the stick and slip stiffnesses its central differences
+    straddle (a hinge's contact that has just stopped sliding sits there, and Newton
+    orbited on it: the full TRL arch, docs/design.md). The block slides at μ = 0.3; from
+    its committed state the last increment's direction is taken on by f of it: 1e-6
+    (a slip of ~1e-12 m, a tenth of h) and 1e-3 (well within the slip branch) give one
+    tangent; -1e-6 and -1e-3 (turning back: stick) another."""
+    model, contact = _sliding_block(0.3)
+    s = StaticSolver(model, interactions=contact)
+    assert s.solve(0.0).converged
+    assert s.advance(displacement={"push": (1e-5, None)}, steps=2)[0].status \
+        is Status.LOAD_REACHED
+    u0 = s.sets[0].u.copy()
+    assert s.advance(displacement={"push": (1.1e-5, None)})[0].status \
+        is Status.LOAD_REACHED
+    uc = s.sets[0].u.copy()
+    du = uc - u0
+
+    def tangent(f):
+        s.sets[0].u[:] = uc + f * du
+        s._forces()
+        return s.assemble_tangent().convert("dense").getDenseArray().copy()
+
+    slip_near, slip_far = tangent(1e-6), tangent(1e-3)
+    stick_near, stick_far = tangent(-1e-6), tangent(-1e-3)
+    s.sets[0].u[:] = uc
+    s._forces()
+    scale = np.abs(stick_far).max()
+    apart = np.abs(stick_far - slip_far).max() / scale  # the two branches differ
+    d_slip = np.abs(slip_near - slip_far).max() / scale
+    d_stick = np.abs(stick_near - stick_far).max() / scale
+    print(f"\nbranches apart {apart:.2e}; near the limit against within the branch: "
+          f"slip {d_slip:.2e}, stick {d_stick:.2e}")
+    assert apart > 1e-2
+    assert d_slip < 1e-4 * apart
+    assert d_stick < 1e-4 * apart
+
+
 def test_a_rebuild_at_a_failed_iterate_keeps_the_committed_friction_history():
     """A Newton iterate far from the committed state (a failed increment) may trigger a
     contact search there that loses the pairs in contact; back at the committed state

@@ -375,7 +375,10 @@ def _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
     dampers' part also into ``fdamp`` (8,): x, y on the nodes of facet ``pairs[k, 0]``
     (first, second), then on those of ``pairs[k, 1]`` (see :func:`facet_facet_forces`).
 
-    ``stick``: no Coulomb return (the tangent at the apex of the friction cone, below).
+    ``stick``: the friction branch of each pass, two bits per pass (pass p in bits 2p,
+    2p + 1; 0 everywhere: the Coulomb return decides): 1 stick (no return: the tangent at
+    the apex of the friction cone), 2 slip forward (τ = +μ p̄), 3 slip backward (τ = −μ p̄)
+    — the branch a tangent's perturbed evaluations hold (:func:`facet_facet_tangent`).
 
     Returns (normal penalty energy, tangential elastic energy, frictional dissipation,
     damper dissipation [J], whether a pass is active, the largest penetration of an
@@ -529,10 +532,16 @@ def _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, cdam
         t_trial = t_old + eps_t[k] * vt * dt
         t_max = mu[k] * pbar
         apex = max(apex, work[Z_PEN])
-        if abs(t_trial) > t_max and not stick:
-            t_new = t_max if t_trial > 0.0 else -t_max
-        else:
+        branch = (stick >> (2 * p)) & 3
+        if branch == 0:
+            if abs(t_trial) > t_max:
+                t_new = t_max if t_trial > 0.0 else -t_max
+            else:
+                t_new = t_trial
+        elif branch == 1:
             t_new = t_trial
+        else:
+            t_new = t_max if branch == 2 else -t_max
         tau[k, p] = t_new
         # the friction force [N] and its dissipation in the step: the work it did over
         # the slip increment vt dt at the mean of its old and new values (as central
@@ -648,7 +657,7 @@ def facet_facet_forces(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, c
             continue
         a, b, c, d, _, _ = _pair_passes(k, X, u, v, facets, fprev, fnext, pairs, eps_n,
                                         eps_t, mu, cdamp, depth, width, dt, tau, tforce,
-                                        fp[k], fdp[k], work, False, zones, use_zones)
+                                        fp[k], fdp[k], work, 0, zones, use_zones)
         w = counted[k]
         e_n += w * a
         e_t += w * b
@@ -782,6 +791,20 @@ def contact_damping(X, u, facets, fprev, fnext, pairs, facet_block, eps_n, depth
         cdamp[k] = eps_n[k] * acc[slot[k], A_COEF]
 
 
+#: the ``stick`` code of :func:`_pair_passes` that holds both passes on the stick branch
+STICK_BOTH = 1 | (1 << 2)
+
+
+@njit(cache=True, inline="always")
+def _held_branch(t_return, t_trial):
+    """The friction branch code of one pass (:func:`_pair_passes`) from its traction
+    with the Coulomb return and without: stick where they agree, else slip on the side
+    of the return; none (0: the return decides) for a pass without traction (apart)."""
+    if t_return == t_trial:
+        return 0 if t_trial == 0.0 else 1
+    return 2 if t_return > 0.0 else 3
+
+
 @njit(cache=True)
 def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, depth,
                         width, tau_c, tau, h, counted, fbuf, work, rows, cols, vals):
@@ -815,11 +838,18 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
             continue
         t0 = tau[k, 0]
         t1 = tau[k, 1]
+        # the base state twice: with the Coulomb return, and without (the trial)
         tau[k, 0] = tau_c[k, 0]
         tau[k, 1] = tau_c[k, 1]
         _, _, _, _, active, apex = _pair_forces(k, X, u, v, facets, fprev, fnext, pairs,
                                                 eps_n, eps_t, mu, nodamp, depth, width, 1.0,
-                                                tau, tforce, fbuf, fbuf, work, False)
+                                                tau, tforce, fbuf, fbuf, work, 0)
+        ret0 = tau[k, 0]
+        ret1 = tau[k, 1]
+        tau[k, 0] = tau_c[k, 0]
+        tau[k, 1] = tau_c[k, 1]
+        _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, nodamp,
+                     depth, width, 1.0, tau, tforce, fbuf, fbuf, work, STICK_BOTH)
         fa = pairs[k, 0]
         fb = pairs[k, 1]
         nodes[0] = facets[fa, 0]
@@ -829,7 +859,16 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
         # a pair out of reach of the perturbations has no tangent; one that is not in
         # contact but within reach (touching, up to round-off) is treated as at the apex
         near = not _far_apart(X, u, facets, fa, fb, depth[k] + 4.0 * h)
-        stick = apex < 2.0 * h  # touching within the step, or not touching
+        # each pass's friction branch at the base state, held by the perturbations: a
+        # pass sliding, or sticking, within ε_t h of the Coulomb limit would otherwise
+        # get the mean of the two branches' stiffnesses (ε_t h ~ 30 Pa at ε_t ~ 4e12
+        # Pa/m; on the full TRL arch a ring layer's contact sliding 12 Pa past its limit
+        # got a tangent 18 times its stiffness along the Newton step). Touching within
+        # the step, or not touching: the stick branch (the apex, above)
+        if apex < 2.0 * h:
+            stick = STICK_BOTH
+        else:
+            stick = _held_branch(ret0, tau[k, 0]) | (_held_branch(ret1, tau[k, 1]) << 2)
         if near:
             nodes[4] = facets[fprev[fa], 0]
             nodes[5] = facets[fnext[fa], 1]
