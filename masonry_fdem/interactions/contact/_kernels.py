@@ -838,18 +838,11 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
             continue
         t0 = tau[k, 0]
         t1 = tau[k, 1]
-        # the base state twice: with the Coulomb return, and without (the trial)
         tau[k, 0] = tau_c[k, 0]
         tau[k, 1] = tau_c[k, 1]
         _, _, _, _, active, apex = _pair_forces(k, X, u, v, facets, fprev, fnext, pairs,
                                                 eps_n, eps_t, mu, nodamp, depth, width, 1.0,
                                                 tau, tforce, fbuf, fbuf, work, 0)
-        ret0 = tau[k, 0]
-        ret1 = tau[k, 1]
-        tau[k, 0] = tau_c[k, 0]
-        tau[k, 1] = tau_c[k, 1]
-        _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, nodamp,
-                     depth, width, 1.0, tau, tforce, fbuf, fbuf, work, STICK_BOTH)
         fa = pairs[k, 0]
         fb = pairs[k, 1]
         nodes[0] = facets[fa, 0]
@@ -865,9 +858,16 @@ def facet_facet_tangent(X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, 
         # Pa/m; on the full TRL arch a ring layer's contact sliding 12 Pa past its limit
         # got a tangent 18 times its stiffness along the Newton step). Touching within
         # the step, or not touching: the stick branch (the apex, above)
-        if apex < 2.0 * h:
-            stick = STICK_BOTH
-        else:
+        stick = STICK_BOTH
+        if near and apex >= 2.0 * h:
+            # the base state again without the Coulomb return (the trial), against the
+            # return above
+            ret0 = tau[k, 0]
+            ret1 = tau[k, 1]
+            tau[k, 0] = tau_c[k, 0]
+            tau[k, 1] = tau_c[k, 1]
+            _pair_forces(k, X, u, v, facets, fprev, fnext, pairs, eps_n, eps_t, mu, nodamp,
+                         depth, width, 1.0, tau, tforce, fbuf, fbuf, work, STICK_BOTH)
             stick = _held_branch(ret0, tau[k, 0]) | (_held_branch(ret1, tau[k, 1]) << 2)
         if near:
             nodes[4] = facets[fprev[fa], 0]
