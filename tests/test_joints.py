@@ -228,6 +228,43 @@ def test_broken_open_joint_is_handed_to_contact_without_a_force_jump():
     assert fc < -0.1 * jm.ft * A
 
 
+def test_a_layer_handed_over_under_compression_keeps_its_force():
+    """A sand layer (k_n = 5e9 Pa/m, no tension or cohesion) pressed by 20 µm and slid
+    along: past half a segment's length its segments go to the block contact, whose own
+    penalty (E/h = 2e11 Pa/m here) is forty times the layer's. Across the layer the
+    contact takes the layer's stiffness, so the normal force carries on — the contact
+    counts only the faces' overlap, W − s of W — where with its own penalty it jumped
+    forty-fold (the contact between the TRL arch's rings met a slid sand layer's
+    compression as 100 MPa). The sliding force stays μ N."""
+    from masonry_fdem.interactions import BlockContact, ContactSettings
+
+    kn, ks, mu, d = 5e9, 2e9, 0.5, 20e-6
+    sand = JointMaterial(kn=kn, ks=ks, tan_phi=mu)
+    blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick")
+    model = Model(blocks, {"brick": Material(E=10e9, nu=0.0, density=2000.0)}, width=T)
+    contact = BlockContact(model, ContactSettings(friction=mu))
+    assert contact.eps_table.max() > 30 * kn
+    joints = Joints(model, {("brick", "brick"): sand}, contact=contact, check_every=1)
+    model.fix_blocks("block:0", name="base")
+    model.fix(lambda X: X[1] > H + 1e-9, name="top")
+    dr = DynamicRelaxation(model, interactions=[contact, joints], rtol=1e-9,
+                           max_iter=200_000)
+    seg = joints.seg_length.max()
+    rows = []
+    for s in np.r_[np.linspace(0.0, 0.4, 5), np.linspace(0.45, 0.7, 6)] * seg:
+        assert dr.solve(0.0, displacement={"top": (s, -d)}).converged
+        fx, fy = dr.reactions()["top"]
+        rows.append((s, fx, fy, bool(joints.released.any())))
+    before = [r for r in rows if not r[3]]
+    after = [r for r in rows if r[3]]
+    assert before and len(after) >= 2, "no segment was handed over"
+    n0 = abs(before[0][2])  # the layer's normal force (the top block compresses a little)
+    assert n0 == pytest.approx(kn * d * W * T, rel=0.05)
+    for s, fx, fy, _ in after[1:]:
+        assert abs(fy) == pytest.approx(n0 * (W - s) / W, rel=0.05)
+        assert abs(fx) == pytest.approx(mu * abs(fy), rel=0.02)
+
+
 def test_cohesionless_interface_opens_as_a_gap_and_closes_where_it_parted():
     """A sand layer (f_t = c = 0) is frictional contact: opened by 0.1 mm and closed
     halfway, it carries nothing (a plastic opening would press it at once, σ = −k_n ·

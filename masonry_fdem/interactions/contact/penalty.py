@@ -9,11 +9,15 @@ Parameters (SI): the normal penalty ε_n [Pa/m] is traction per metre of penetra
 default ``penalty_factor · E_min / h`` with E_min the smaller Young's modulus of the pair
 and h the mean boundary facet length of the model, so a facet node's contact spring is
 comparable with the stiffness of its element. The tangential penalty is
-``tangential_ratio · ε_n``. Normal energy loss follows from the restitution coefficient e
-through a normal viscous damper that never pulls (see ``_kernels``): the damper of two
-blocks is the fraction ζ(e) of critical for the blocks as rigid bodies on the springs of
-their contact, so a rigid impact rebounds with e times its approach velocity, flat or on
-a corner, and a contact that stays closed keeps its force and its friction.
+``tangential_ratio · ε_n``. Through a joint layer (a pair with a facet the joints bonded:
+a crack's or a mortar joint's faces once handed over, a ring's face slid along the sand
+layer onto the next, a corner pressed through it) the penalties are the softest layer's
+k_n and k_s where these are softer (:meth:`BlockContact.set_layers`). Normal energy loss
+follows from the restitution coefficient e through a normal viscous damper that never
+pulls (see ``_kernels``): the damper of two blocks is the fraction ζ(e) of critical for
+the blocks as rigid bodies on the springs of their contact, so a rigid impact rebounds
+with e times its approach velocity, flat or on a corner, and a contact that stays closed
+keeps its force and its friction.
 """
 
 from __future__ import annotations
@@ -198,6 +202,10 @@ class BlockContact(Interaction):
         self.g_prev[self.g_next] = np.arange(gf.shape[0])
         self.g_block = np.asarray(blocks.facet_block, dtype=np.int64)
         self.g_material = blocks.block_material[self.g_block].astype(np.int64)
+        # the normal and shear stiffness [Pa/m] of the joint layer on each facet (NaN: no
+        # layer, or layers of two stiffnesses); see :meth:`set_layers`
+        self.g_layer_kn = np.full(gf.shape[0], np.nan)
+        self.g_layer_ks = np.full(gf.shape[0], np.nan)
         self.g_length = np.linalg.norm(blocks.x[gf[:, 1]] - blocks.x[gf[:, 0]], axis=1)
         perimeter = np.bincount(self.g_block, weights=self.g_length, minlength=blocks.n_blocks)
         self.block_thickness = 2.0 * np.asarray(blocks.block_area) / perimeter
@@ -618,6 +626,7 @@ class BlockContact(Interaction):
         mb = self.facet_material[self.pairs[:, 1]]
         self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
         self.eps_t = self.settings.tangential_ratio * self.eps_n
+        self._layer_stiffness()
         self.mu = np.ascontiguousarray(self.mu_table[ma, mb])
         self._no_damping = np.zeros(self.pairs.shape[0])
         self.cdamp = np.zeros(self.pairs.shape[0])
@@ -825,6 +834,44 @@ class BlockContact(Interaction):
             else:
                 setattr(self, k, v.copy() if isinstance(v, np.ndarray) else v)
         self._sync(self.model.v)
+
+    def set_layers(self, kn: np.ndarray, ks: np.ndarray) -> None:
+        """The stiffness of the joint layer on each global facet: ``kn``, ``ks`` [Pa/m],
+        NaN where no joint bonds the facet (the joints tell it, :class:`Joints`).
+
+        A pair with a facet on a joint layer is a contact through that layer (the faces of
+        a joint handed over; a face slid along the layer onto the next; a corner pressed
+        through the layer onto the face beside it): its penalties are the softest layer's
+        k_n and k_s of its two facets where these are softer than its own. So a joint
+        handed over under compression keeps its force (a 10 mm sand layer, k_n = 5e9 Pa/m,
+        compressed 40 µm under 0.2 MPa, met the block penalty of 4e12 Pa/m as 160 MPa) and
+        the layer keeps its compliance after it breaks. Never stiffer than the contact's
+        own penalty, whose stable time step the explicit solver takes.
+        """
+        kn = np.asarray(kn, dtype=float)
+        ks = np.asarray(ks, dtype=float)
+        if kn.shape != self.g_layer_kn.shape or ks.shape != kn.shape:
+            raise ValueError("set_layers needs one kn and one ks per boundary facet")
+        if np.any(kn <= 0) or np.any(ks <= 0):
+            raise ValueError("layer stiffnesses must be > 0 (NaN: no layer)")
+        self.g_layer_kn = kn.copy()
+        self.g_layer_ks = ks.copy()
+        if getattr(self, "pairs", None) is not None and hasattr(self, "ext_gid"):
+            ma = self.facet_material[self.pairs[:, 0]]
+            mb = self.facet_material[self.pairs[:, 1]]
+            self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
+            self.eps_t = self.settings.tangential_ratio * self.eps_n
+            self._layer_stiffness()
+
+    def _layer_stiffness(self) -> None:
+        """Give the pairs through a joint layer its stiffness (:meth:`set_layers`)."""
+        if self.pairs.shape[0] == 0:
+            return
+        ga = self.ext_gid[self.pairs[:, 0]]
+        gb = self.ext_gid[self.pairs[:, 1]]
+        # fmin: NaN (no layer) gives way to a number
+        self.eps_n = np.fmin(self.eps_n, np.fmin(self.g_layer_kn[ga], self.g_layer_kn[gb]))
+        self.eps_t = np.fmin(self.eps_t, np.fmin(self.g_layer_ks[ga], self.g_layer_ks[gb]))
 
     def exclude(self, keys: np.ndarray, bonded_pairs: np.ndarray) -> None:
         """Leave out the facet pairs ``keys`` (min·n + max of global facet ids: bonded

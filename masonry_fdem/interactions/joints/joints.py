@@ -22,8 +22,9 @@ frictional contact (:class:`~masonry_fdem.interactions.BlockContact`).
 A fully softened joint is Coulomb friction without tension, i.e. frictional contact with
 the joint's stiffness. A segment whose points have all softened (to ``release_ratio`` of
 their strength) and opened is handed over to the block contact, so no force jumps; so is one that
-has slid by more than half its length (there the two contacts agree when the contact
-penalty equals the joint's k_n), and one whose two facets have turned against each other
+has slid by more than half its length (the contact through a joint layer takes the layer's
+k_n and k_s where they are softer than its own penalty, so the two agree:
+:meth:`BlockContact.set_layers`), and one whose two facets have turned against each other
 by more than ``release_turn`` (a piece swung open about one closed end). While a segment
 is bonded, the block contact ignores its facet pair, and every facet pair of two blocks
 joined only by bonded segments.
@@ -419,6 +420,7 @@ class Joints(Interaction):
         self._ipmat_x = np.arange(m, dtype=self.ipmat.dtype)
         self.released = np.zeros(nseg, dtype=bool)
         self.seg_blocks = np.c_[fblock[fa], fblock[fb]]
+        self._layers_told = False
         self._tell_contact()
         # facet -> cell, for the state field
         self._facet_cell = _facet_cells(blocks, gf)
@@ -646,12 +648,29 @@ class Joints(Interaction):
         c = self.contact
         if c is None:
             return
+        if not self._layers_told and hasattr(c, "set_layers"):
+            c.set_layers(*self.facet_layers(c.g_layer_kn.size))
+            self._layers_told = True
         nb = self.model.blocks.n_blocks
         sb = self.seg_blocks
         key = np.minimum(sb[:, 0], sb[:, 1]) * nb + np.maximum(sb[:, 0], sb[:, 1])
         joined = np.setdiff1d(np.unique(key[~self.released]),
                               np.r_[key[self.released], self._dry_pairs])
         c.exclude(self.seg_key[~self.released], joined)
+
+    def facet_layers(self, n_facets: int) -> tuple[np.ndarray, np.ndarray]:
+        """(n_facets,) k_n and k_s [Pa/m] of the joint layer on each global boundary facet
+        (the softest of the segments on it), NaN where no segment lies on it; the contact
+        takes them for pairs through a layer (:meth:`BlockContact.set_layers`)."""
+        seg_mat = self.g_mat[::2]
+        f = self.seg_facets.T.ravel()
+        out = []
+        for col in (JK.P_KN, JK.P_KS):
+            k = np.tile(self.props[seg_mat, col], 2)
+            lo = np.full(n_facets, np.inf)
+            np.minimum.at(lo, f, k)
+            out.append(np.where(np.isfinite(lo), lo, np.nan))
+        return out[0], out[1]
 
     def set_friction(self, material: JointMaterial, tan_phi: float) -> int:
         """Give the joints of ``material`` the friction coefficient ``tan_phi`` from now
