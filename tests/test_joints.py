@@ -231,8 +231,9 @@ def test_broken_open_joint_is_handed_to_contact_without_a_force_jump():
 def test_a_layer_handed_over_under_compression_keeps_its_force():
     """A sand layer (k_n = 5e9 Pa/m, no tension or cohesion) pressed by 20 µm and slid
     along: past half a segment's length its segments go to the block contact, whose own
-    penalty (E/h = 2e11 Pa/m here) is forty times the layer's. Across the layer the
-    contact takes the layer's stiffness, so the normal force carries on — the contact
+    penalty (E/h = 2e11 Pa/m here) is forty times the layer's. Through the layer
+    (``through_layers``) the contact takes the layer's stiffness, so the normal force
+    carries on — the contact
     counts only the faces' overlap, W − s of W — where with its own penalty it jumped
     forty-fold (the contact between the TRL arch's rings met a slid sand layer's
     compression as 100 MPa). The sliding force stays μ N."""
@@ -242,7 +243,7 @@ def test_a_layer_handed_over_under_compression_keeps_its_force():
     sand = JointMaterial(kn=kn, ks=ks, tan_phi=mu)
     blocks = build_stack(2, width=W, height=H, mesh_size=0.05, material="brick")
     model = Model(blocks, {"brick": Material(E=10e9, nu=0.0, density=2000.0)}, width=T)
-    contact = BlockContact(model, ContactSettings(friction=mu))
+    contact = BlockContact(model, ContactSettings(friction=mu, through_layers=True))
     assert contact.eps_table.max() > 30 * kn
     joints = Joints(model, {("brick", "brick"): sand}, contact=contact, check_every=1)
     model.fix_blocks("block:0", name="base")

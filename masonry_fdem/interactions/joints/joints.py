@@ -22,12 +22,13 @@ frictional contact (:class:`~masonry_fdem.interactions.BlockContact`).
 A fully softened joint is Coulomb friction without tension, i.e. frictional contact with
 the joint's stiffness. A segment whose points have all softened (to ``release_ratio`` of
 their strength) and opened is handed over to the block contact, so no force jumps; so is one that
-has slid by more than half its length (the contact through a joint layer takes the layer's
-k_n and k_s where they are softer than its own penalty, so the two agree:
-:meth:`BlockContact.set_layers`), and one whose two facets have turned against each other
-by more than ``release_turn`` (a piece swung open about one closed end). While a segment
-is bonded, the block contact ignores its facet pair, and every facet pair of two blocks
-joined only by bonded segments.
+has slid by more than half its length (the two agree where the contact's penalty is the
+joint's k_n: with ``ContactSettings(through_layers=True)`` the contact through a joint
+layer takes the layer's k_n and k_s where softer than its own; by default a segment
+handed over while pressed meets the contact's penalty), and one whose two facets have
+turned against each other by more than ``release_turn`` (a piece swung open about one
+closed end). While a segment is bonded, the block contact ignores its facet pair, and
+every facet pair of two blocks joined only by bonded segments.
 
 Parallel: every rank knows every segment; a segment is evaluated by every rank holding one
 of its two blocks (the nodes of the other side exchanged every step), and each rank sums
