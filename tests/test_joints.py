@@ -233,10 +233,9 @@ def test_a_layer_handed_over_under_compression_keeps_its_force():
     along: past half a segment's length its segments go to the block contact, whose own
     penalty (E/h = 2e11 Pa/m here) is forty times the layer's. Through the layer
     (``through_layers``) the contact takes the layer's stiffness, so the normal force
-    carries on — the contact
-    counts only the faces' overlap, W − s of W — where with its own penalty it jumped
-    forty-fold (the contact between the TRL arch's rings met a slid sand layer's
-    compression as 100 MPa). The sliding force stays μ N."""
+    carries on — the contact counts only the faces' overlap, W − s of W — where with its
+    own penalty it jumped forty-fold (the contact between the TRL arch's rings met a slid
+    sand layer's compression as 100 MPa). The sliding force stays μ N."""
     from masonry_fdem.interactions import BlockContact, ContactSettings
 
     kn, ks, mu, d = 5e9, 2e9, 0.5, 20e-6

@@ -210,7 +210,7 @@ class BlockContact(Interaction):
         self.g_block = np.asarray(blocks.facet_block, dtype=np.int64)
         self.g_material = blocks.block_material[self.g_block].astype(np.int64)
         # the normal and shear stiffness [Pa/m] of the joint layer on each facet (NaN: no
-        # layer, or layers of two stiffnesses); see :meth:`set_layers`
+        # layer); see :meth:`set_layers`
         self.g_layer_kn = np.full(gf.shape[0], np.nan)
         self.g_layer_ks = np.full(gf.shape[0], np.nan)
         self.g_length = np.linalg.norm(blocks.x[gf[:, 1]] - blocks.x[gf[:, 0]], axis=1)
@@ -629,11 +629,9 @@ class BlockContact(Interaction):
         # the passes' friction forces at the last evaluation [N] (their dissipation)
         self.tforce = (np.zeros_like(self.tau) if tforce is None else
                        np.ascontiguousarray(tforce, dtype=float).reshape(-1, 2))
+        self._pair_stiffness()
         ma = self.facet_material[self.pairs[:, 0]]
         mb = self.facet_material[self.pairs[:, 1]]
-        self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
-        self.eps_t = self.settings.tangential_ratio * self.eps_n
-        self._layer_stiffness()
         self.mu = np.ascontiguousarray(self.mu_table[ma, mb])
         self._no_damping = np.zeros(self.pairs.shape[0])
         self.cdamp = np.zeros(self.pairs.shape[0])
@@ -847,14 +845,14 @@ class BlockContact(Interaction):
         NaN where no joint bonds the facet (the joints tell it, :class:`Joints`).
 
         With ``ContactSettings.through_layers`` (off by default), a pair with a facet on
-        a joint layer is a contact through that layer (the faces of
-        a joint handed over; a face slid along the layer onto the next; a corner pressed
-        through the layer onto the face beside it): its penalties are the softest layer's
-        k_n and k_s of its two facets where these are softer than its own. So a joint
-        handed over under compression keeps its force (a 10 mm sand layer, k_n = 5e9 Pa/m,
-        compressed 40 µm under 0.2 MPa, met the block penalty of 4e12 Pa/m as 160 MPa) and
-        the layer keeps its compliance after it breaks. Never stiffer than the contact's
-        own penalty, whose stable time step the explicit solver takes.
+        a joint layer is a contact through that layer (the faces of a joint handed over;
+        a face slid along the layer onto the next; a corner pressed through the layer
+        onto the face beside it): its penalties are the softest layer's k_n and k_s of
+        its two facets where these are softer than its own. So a joint handed over under
+        compression keeps its force (a 10 mm sand layer, k_n = 5e9 Pa/m, compressed 40 µm
+        under 0.2 MPa, met the block penalty of 4e12 Pa/m as 160 MPa) and the layer keeps
+        its compliance after it breaks. Never stiffer than the contact's own penalty,
+        whose stable time step the explicit solver takes.
         """
         kn = np.asarray(kn, dtype=float)
         ks = np.asarray(ks, dtype=float)
@@ -864,16 +862,17 @@ class BlockContact(Interaction):
             raise ValueError("layer stiffnesses must be > 0 (NaN: no layer)")
         self.g_layer_kn = kn.copy()
         self.g_layer_ks = ks.copy()
-        if getattr(self, "pairs", None) is not None and hasattr(self, "ext_gid"):
-            ma = self.facet_material[self.pairs[:, 0]]
-            mb = self.facet_material[self.pairs[:, 1]]
-            self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
-            self.eps_t = self.settings.tangential_ratio * self.eps_n
-            self._layer_stiffness()
+        if hasattr(self, "ext_gid"):  # pairs installed: their penalties again
+            self._pair_stiffness()
 
-    def _layer_stiffness(self) -> None:
-        """Give the pairs through a joint layer its stiffness (:meth:`set_layers`;
-        with ``ContactSettings.through_layers``)."""
+    def _pair_stiffness(self) -> None:
+        """The pairs' penalties ``eps_n``, ``eps_t`` [Pa/m]: the materials' table, and
+        with ``ContactSettings.through_layers`` a joint layer's where softer
+        (:meth:`set_layers`)."""
+        ma = self.facet_material[self.pairs[:, 0]]
+        mb = self.facet_material[self.pairs[:, 1]]
+        self.eps_n = np.ascontiguousarray(self.eps_table[ma, mb])
+        self.eps_t = self.settings.tangential_ratio * self.eps_n
         if not self.settings.through_layers or self.pairs.shape[0] == 0:
             return
         ga = self.ext_gid[self.pairs[:, 0]]

@@ -421,7 +421,8 @@ class Joints(Interaction):
         self._ipmat_x = np.arange(m, dtype=self.ipmat.dtype)
         self.released = np.zeros(nseg, dtype=bool)
         self.seg_blocks = np.c_[fblock[fa], fblock[fb]]
-        self._layers_told = False
+        if contact is not None and hasattr(contact, "set_layers"):
+            contact.set_layers(*self.facet_layers(gf.shape[0]))
         self._tell_contact()
         # facet -> cell, for the state field
         self._facet_cell = _facet_cells(blocks, gf)
@@ -649,9 +650,6 @@ class Joints(Interaction):
         c = self.contact
         if c is None:
             return
-        if not self._layers_told and hasattr(c, "set_layers"):
-            c.set_layers(*self.facet_layers(c.g_layer_kn.size))
-            self._layers_told = True
         nb = self.model.blocks.n_blocks
         sb = self.seg_blocks
         key = np.minimum(sb[:, 0], sb[:, 1]) * nb + np.maximum(sb[:, 0], sb[:, 1])
