@@ -135,6 +135,35 @@ def test_softening_integration_reaches_the_joints():
     assert "analysis.softening" in problems_of(data)
 
 
+def test_through_layers_reaches_the_contact():
+    """``[analysis] through_layers``: off by default; true gives the block contact the
+    joint layers' stiffness (a pair with a facet on the sand layer takes its k_n where
+    softer than the penalty), and the report says so; a non-boolean is named."""
+    from masonry_fdem.assessment.assess import build_model
+    from masonry_fdem.assessment.report import _solver_text
+
+    assert load_case(example()).analysis.through_layers is False
+    data = example()
+    data["joints"]["ring"] = {"type": "sand", "tan_phi": 0.5, "kn": 5e9, "ks": 2e9}
+    kn = []
+    for on in (False, True):
+        data.setdefault("analysis", {})["through_layers"] = on
+        case = load_case(data)
+        assert case.analysis.through_layers is on
+        model, inter, _ = build_model(case, MPI.COMM_WORLD)
+        contact = next(i for i in inter if i.name == "contact")
+        assert contact.settings.through_layers is on
+        contact.rebuild(np.zeros_like(model.v))  # the candidate pairs and their penalties
+        kn.append(MPI.COMM_WORLD.allreduce(float(contact.eps_n.min()) if contact.eps_n.size
+                                           else np.inf, op=MPI.MIN))
+        assert ("joint layer at the layer's stiffness" in _solver_text(case)) is on
+    print(f"\nsmallest contact penalty: {kn[0]:.3g} Pa/m off, {kn[1]:.3g} Pa/m on")
+    assert kn[1] == pytest.approx(5e9)  # the sand layer's k_n on its facets' pairs
+    assert kn[0] > 100 * 5e9  # the contact's own penalty, E/h
+    data["analysis"]["through_layers"] = "yes"
+    assert "analysis.through_layers" in problems_of(data)
+
+
 @pytest.mark.parametrize(
     ("key", "value", "expected"),
     [("position", 1.3, "loading.position: 1.3 is off the arch (0..1 of the span)"),

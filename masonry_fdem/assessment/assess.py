@@ -408,7 +408,8 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
         model.add_gravity()
     contact = BlockContact(model, ContactSettings(
         friction=case.analysis.friction, friction_table=friction_table,
-        penalty_factor=case.analysis.penalty_factor))
+        penalty_factor=case.analysis.penalty_factor,
+        through_layers=case.analysis.through_layers))
 
     table = {k: joint_or_contact(v) for k, v in case.joint_materials().items()}
     rules = [(where, joint_or_contact(jm)) for where, jm in case.joint_rules(layout)]

@@ -124,7 +124,11 @@ Schema (``*``: required):
     iteration) or "imex" (the joints' softening implicit–explicit, Oliver et al. 2008:
     strengths held within an increment at values extrapolated from the last two, so
     Newton cannot cycle between a softening point and its unloading; an error of the
-    first order in the increment — see docs/design.md, "IMEX softening").
+    first order in the increment — see docs/design.md, "IMEX softening");
+    ``through_layers`` (false): the block contact through a joint layer handed over to
+    it (a sand layer slid by half a segment) takes the layer's k_n, k_s where softer
+    than its penalties (``ContactSettings.through_layers``; off by default, see
+    docs/trl.md, "The contact through the sand layers").
 ``[checks]``
     ``allow``: keys (``"materials.brick.E"``) whose magnitude checks are switched off.
 ``[[anchors]]``

@@ -207,7 +207,8 @@ class DiskFillBridge:
         # load factor (the factor is the load [N])
         model.add_point_load((xl, top + t), (0.0, -1.0), blocks=name)
         contact = BlockContact(model, ContactSettings(
-            friction=case.analysis.friction, penalty_factor=case.analysis.penalty_factor))
+            friction=case.analysis.friction, penalty_factor=case.analysis.penalty_factor,
+            through_layers=case.analysis.through_layers))
         jm = case.joint_materials()
         v, a = case.arch.voussoir_material, case.arch.abutment_material
 

@@ -661,7 +661,7 @@ def load_case(source: str | Path | Mapping[str, Any], *, name: str | None = None
             an.dr_rtol, an.max_iterations, Path(an.output or f"runs/{name}"), an.refinements,
             an.hinge_opening, an.penalty_factor, an.post_peak_steps, an.post_peak_drop,
             an.follow_peak, an.solver, an.newton_rtol, an.newton_iterations, an.newton_steps,
-            an.paraview_every, an.softening)
+            an.paraview_every, an.softening, an.through_layers)
     _magnitudes_against_structure(arch, mats, lm, ctx)
     problems = ctx.problems
     if not problems and None in (arch, mortar, ring, loading, analysis):

@@ -554,7 +554,9 @@ def _solver_text(case) -> str:
                 f"equilibrium to {an.newton_rtol:g} of the forces"
                 + ("; the joints' softening implicit–explicit (IMEX: strengths held at "
                    "values extrapolated from the last two increments)"
-                   if an.softening == "imex" else ""))
+                   if an.softening == "imex" else "")
+                + ("; the contact through a joint layer at the layer's stiffness"
+                   if an.through_layers else ""))
     return (f"dynamic relaxation, {case.loading.control.value} control; equilibrium to "
             f"{an.dr_rtol:g} of the forces within {an.max_iterations} iterations")
 

@@ -287,6 +287,7 @@ class AnalysisModel(_Table):
     newton_steps: integer(ge=1) = 400
     paraview_every: integer(ge=0) = 10
     softening: Literal["implicit", "imex"] = "implicit"
+    through_layers: bool = False
 
 
 class SteelModel(_Table):

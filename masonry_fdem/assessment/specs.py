@@ -238,6 +238,7 @@ class AnalysisSpec:
     newton_steps: int = 400
     paraview_every: int = 10
     softening: str = "implicit"
+    through_layers: bool = False
 
 
 @dataclass(frozen=True)
