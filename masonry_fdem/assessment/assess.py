@@ -379,7 +379,7 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
     """
     from masonry_fdem.interactions.anchors import Anchors
     from masonry_fdem.model import Model
-    from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
+    from masonry_fdem.interactions import BlockContact, Joints
 
     layout = case.mesh_layout()
     sizes = [case.arch.mesh_size] * len(layout)
@@ -406,10 +406,7 @@ def build_model(case: ArchCase, comm: MPI.Comm = MPI.COMM_WORLD):
         model.prescribe_velocity(SPREADER[0], (0.0, None), name="beam guide")
     if case.loading.self_weight:
         model.add_gravity()
-    contact = BlockContact(model, ContactSettings(
-        friction=case.analysis.friction, friction_table=friction_table,
-        penalty_factor=case.analysis.penalty_factor,
-        through_layers=case.analysis.through_layers))
+    contact = BlockContact(model, case.analysis.contact_settings(friction_table=friction_table))
 
     table = {k: joint_or_contact(v) for k, v in case.joint_materials().items()}
     rules = [(where, joint_or_contact(jm)) for where, jm in case.joint_rules(layout)]

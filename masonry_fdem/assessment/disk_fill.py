@@ -133,7 +133,7 @@ class DiskFillBridge:
         from masonry_fdem.geometry import polygon_area
         from masonry_fdem.geometry.fill import fill_layout
         from masonry_fdem.geometry.layout import BlockLayout
-        from masonry_fdem.interactions import BlockContact, ContactSettings, Joints
+        from masonry_fdem.interactions import BlockContact, Joints
         from masonry_fdem.interactions.disks import DiskMaterial
         from masonry_fdem.interactions.disks.fill import fill_disks, radii_for_count
         from masonry_fdem.model import Model
@@ -206,9 +206,7 @@ class DiskFillBridge:
         # the load: a unit force at the middle of the beam's top, scaled by the solver's
         # load factor (the factor is the load [N])
         model.add_point_load((xl, top + t), (0.0, -1.0), blocks=name)
-        contact = BlockContact(model, ContactSettings(
-            friction=case.analysis.friction, penalty_factor=case.analysis.penalty_factor,
-            through_layers=case.analysis.through_layers))
+        contact = BlockContact(model, case.analysis.contact_settings())
         jm = case.joint_materials()
         v, a = case.arch.voussoir_material, case.arch.abutment_material
 

@@ -240,6 +240,14 @@ class AnalysisSpec:
     softening: str = "implicit"
     through_layers: bool = False
 
+    def contact_settings(self, **kw):
+        """The block contact's settings from this table (friction, penalty factor,
+        contact through joint layers); ``kw`` adds others (``friction_table``)."""
+        from masonry_fdem.interactions import ContactSettings
+
+        return ContactSettings(friction=self.friction, penalty_factor=self.penalty_factor,
+                               through_layers=self.through_layers, **kw)
+
 
 @dataclass(frozen=True)
 class AnchorSpec:
